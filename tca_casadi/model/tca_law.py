@@ -1,0 +1,86 @@
+"""The TCA's own law by Castigliano's second theorem (SPEC section 4).
+
+``delta = A_cst (dtheta(T) - dtheta(T_ref)) + F / K_cst(F)``, with
+``A_cst = l_t r_c cos(alpha)``, ``1/K_cst = l_t r_c^2 cos^2(alpha) / (G_t(F) J_t)``,
+``J_t = pi r_t^4 / 2``. The residual is multiplied through by ``G_t(F)`` (never divided).
+Every method accepts CasADi symbols or numpy arrays.
+"""
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+
+@dataclass(frozen=True)
+class TcaLaw:
+    """Constants of one TCA. Units: m, N, Pa, degC, rad/m."""
+    coil_radius: float
+    fiber_radius: float
+    pitch_angle: float
+    fiber_length: float
+    reference_length: float
+    reference_temperature: float
+    untwist_coefficients: tuple  # (c2, c1, c0), rad/m
+    shear_coefficients: tuple    # (a2, a1, a0), Pa
+
+    @classmethod
+    def from_type(cls, tca_type, reference_length):
+        """Law of a TCA of ``tca_type`` whose path has reference length ``l*`` [m]."""
+        alpha = tca_type.pitch_angle
+        fiber = tca_type.fiber_length or reference_length / math.sin(alpha)
+        return cls(tca_type.coil_radius, tca_type.fiber_radius, alpha, fiber, reference_length,
+                   tca_type.reference_temperature,
+                   (tca_type.untwist.c2, tca_type.untwist.c1, tca_type.untwist.c0),
+                   (tca_type.shear_modulus.a2, tca_type.shear_modulus.a1, tca_type.shear_modulus.a0))
+
+    @property
+    def stroke_coefficient(self):
+        """``A_cst = l_t r_c cos(alpha)`` [m^2]."""
+        return self.fiber_length * self.coil_radius * math.cos(self.pitch_angle)
+
+    @property
+    def compliance_numerator(self):
+        """``l_t r_c^2 cos^2(alpha) / J_t`` [1/m]: ``1/K_cst = this / G_t``."""
+        polar = math.pi * self.fiber_radius**4 / 2.0
+        return self.fiber_length * self.coil_radius**2 * math.cos(self.pitch_angle)**2 / polar
+
+    @property
+    def monotone_limit(self):
+        """Tension [N] where ``F / G_t(F)`` peaks: beyond it the fit is not monotone."""
+        a2, _, a0 = self.shear_coefficients
+        return math.sqrt(a0 / a2) if a2 > 0 else math.inf
+
+    def untwist(self, temperature):
+        """``dtheta(T)`` [rad per m of fiber]."""
+        c2, c1, c0 = self.untwist_coefficients
+        return c2 * temperature**2 + c1 * temperature + c0
+
+    def free_stroke(self, temperature):
+        """Free stroke [m] at zero force (negative = contraction)."""
+        return self.stroke_coefficient * (self.untwist(temperature)
+                                          - self.untwist(self.reference_temperature))
+
+    def shear_modulus(self, force):
+        """``G_t(F)`` [Pa]: the fit for F >= 0, a positive C1 exponential extension for F < 0."""
+        a2, a1, a0 = self.shear_coefficients
+        fit = a2 * force**2 + a1 * force + a0
+        if isinstance(force, (ca.SX, ca.MX, ca.DM)):
+            extension = a0 * ca.exp(force * a1 / a0)
+            return ca.if_else(force >= 0, fit, extension)
+        force = np.asarray(force, dtype=float)
+        return np.where(force >= 0, fit, a0 * np.exp(np.minimum(force, 0.0) * a1 / a0))
+
+    def stretch(self, force):
+        """Elastic part ``F / K_cst(F)`` [m]."""
+        return force * self.compliance_numerator / self.shear_modulus(force)
+
+    def residual(self, stroke, force, temperature):
+        """``G_t(F) (delta - free_stroke(T)) - F l_t r_c^2 cos^2(alpha) / J_t`` [Pa m]."""
+        return (self.shear_modulus(force) * (stroke - self.free_stroke(temperature))
+                - force * self.compliance_numerator)
+
+    @property
+    def residual_scale(self):
+        """A natural size of :meth:`residual` [Pa m], to scale it to order one."""
+        return self.shear_coefficients[2] * self.reference_length

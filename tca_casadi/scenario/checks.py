@@ -1,0 +1,97 @@
+"""Checks that need the whole scenario: names unique and resolvable, spans and load positions
+inside their module. Each failure is one line naming file, line and key path."""
+import difflib
+
+from ..errors import ScenarioError
+
+#: top-level keys; module and load names must differ from them so dotted paths stay unambiguous
+RESERVED = ("name", "description", "gravity", "base", "materials", "tca_types", "modules",
+            "loads", "solver")
+
+
+def fail(raw, sources, path, message):
+    """Raise :class:`ScenarioError` for ``path`` (a raw-data key path)."""
+    from .loader import format_path
+    raise ScenarioError(f"{sources.where(path)}: {format_path(path, raw)}: {message}")
+
+
+def closest(word, options):
+    """`` (did you mean 'x'?)`` or a list of the valid names."""
+    match = difflib.get_close_matches(word, list(options), n=1, cutoff=0.5)
+    if match:
+        return f" (did you mean {match[0]!r}?)"
+    return f"; known: {', '.join(options)}" if options else "; none are defined"
+
+
+def check_references(scenario, raw, sources):
+    """Cross-reference checks on a schema-valid scenario."""
+    module_names = _unique_names(scenario.modules, ("modules",), raw, sources)
+    load_names = _unique_names(scenario.loads, ("loads",), raw, sources)
+    for index, name in enumerate(load_names):
+        if name in module_names:
+            fail(raw, sources, ("loads", index, "name"), f"load name {name!r} is also a module name")
+    for index, module in enumerate(scenario.modules):
+        _check_module(scenario, index, module, raw, sources)
+    for index, load in enumerate(scenario.loads):
+        _check_load(scenario, index, load, raw, sources)
+
+
+def _unique_names(items, path, raw, sources):
+    names = []
+    for index, item in enumerate(items):
+        if item.name in names:
+            fail(raw, sources, path + (index, "name"), f"duplicate name {item.name!r}")
+        if item.name in RESERVED:
+            fail(raw, sources, path + (index, "name"), f"{item.name!r} is a reserved top-level key")
+        if "." in item.name or "=" in item.name:
+            fail(raw, sources, path + (index, "name"), "names must not contain '.' or '='")
+        names.append(item.name)
+    return names
+
+
+def _check_module(scenario, index, module, raw, sources):
+    path = ("modules", index)
+    if module.material not in scenario.materials:
+        fail(raw, sources, path + ("material",),
+             f"unknown material {module.material!r}{closest(module.material, scenario.materials)}")
+    if index == 0 and module.connector is not None:
+        fail(raw, sources, path + ("connector",),
+             "the first module has no previous module to connect to (use base:)")
+    _unique_names(module.actuators, path + ("actuators",), raw, sources)
+    for a_index, actuator in enumerate(module.actuators):
+        a_path = path + ("actuators", a_index)
+        if actuator.kind == "tca" and actuator.type not in scenario.tca_types:
+            fail(raw, sources, a_path + ("type",),
+                 f"unknown TCA type {actuator.type!r}{closest(actuator.type, scenario.tca_types)}")
+        _check_span(route_span(actuator.route, module.length), module, a_path + ("route",), raw, sources)
+
+
+def route_span(route, length):
+    """``(s_a, s_b)`` of a route on a module of ``length`` [m]."""
+    if route.span is not None:
+        return tuple(route.span)
+    if route.kind == "curve":
+        return (route.points[0][0], route.points[-1][0])
+    return (0.0, length)
+
+
+def _check_span(span, module, path, raw, sources):
+    s_a, s_b = span
+    if not (0.0 <= s_a < s_b <= module.length * (1 + 1e-12)):
+        fail(raw, sources, path, f"span [{s_a * 1e3:g}, {s_b * 1e3:g}] mm must satisfy "
+             f"0 <= s_a < s_b <= length ({module.length * 1e3:g} mm)")
+
+
+def _check_load(scenario, index, load, raw, sources):
+    path = ("loads", index)
+    modules = {m.name: m for m in scenario.modules}
+    if load.module not in modules:
+        fail(raw, sources, path + ("module",),
+             f"unknown module {load.module!r}{closest(load.module, modules)}")
+    module = modules[load.module]
+    if load.kind == "distributed":
+        if load.span is not None:
+            _check_span(load.span, module, path + ("span",), raw, sources)
+    elif not isinstance(load.at, str) and load.at > module.length * (1 + 1e-12):
+        fail(raw, sources, path + ("at",), f"at = {load.at * 1e3:g} mm lies beyond the module's "
+             f"length ({module.length * 1e3:g} mm)")

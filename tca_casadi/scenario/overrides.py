@@ -1,0 +1,101 @@
+"""Dotted-path overrides: ``bending.tca2.temperature=100``, ``payload.force=[0,0,-0.02]``,
+``base.position=[0,0,0.1]``, ``solver.intervals=32``.
+
+A path's first part is a top-level key, a module name or a load name; inside a module, an
+actuator name. Values are read as YAML (so ``100``, ``"45 mm"`` and ``[0, 0, 1]`` all work).
+"""
+import copy
+
+import yaml
+
+from ..errors import ScenarioError
+from .checks import RESERVED, closest
+
+
+def parse_override(text):
+    """``"a.b=1"`` -> ``("a.b", 1)``."""
+    if "=" not in text:
+        raise ScenarioError(f"--set {text}: expected PATH=VALUE, e.g. bending.tca2.temperature=100")
+    path, value = text.split("=", 1)
+    try:
+        parsed = yaml.safe_load(value) if value.strip() else None
+    except yaml.YAMLError:
+        raise ScenarioError(f"--set {text}: cannot read the value {value!r}") from None
+    if not path.strip():
+        raise ScenarioError(f"--set {text}: empty path")
+    return path.strip(), parsed
+
+
+def apply_overrides(raw, overrides, sources=None):
+    """A copy of ``raw`` with every override applied; records their origin in ``sources``."""
+    items = overrides.items() if isinstance(overrides, dict) else [parse_override(o) for o in overrides]
+    raw = copy.deepcopy(raw)
+    for path, value in items:
+        key_path = resolve(raw, path)
+        _assign(raw, key_path, value)
+        if sources is not None:
+            sources.overridden[key_path] = f"--set {path}"
+    return raw
+
+
+def resolve(raw, dotted):
+    """Raw-data key path (tuple of keys and list indices) addressed by a dotted path."""
+    parts = dotted.split(".")
+    head, rest = parts[0], parts[1:]
+    if head in RESERVED or not isinstance(raw, dict):
+        return _walk(raw, (head,), rest, dotted)
+    for list_key in ("modules", "loads"):
+        for index, item in enumerate(raw.get(list_key) or []):
+            if isinstance(item, dict) and item.get("name") == head:
+                path = (list_key, index)
+                if list_key == "modules" and rest:
+                    actuator = _named(item.get("actuators"), rest[0])
+                    if actuator is not None:
+                        return _walk(raw, path + ("actuators", actuator), rest[1:], dotted)
+                return _walk(raw, path, rest, dotted)
+    names = [i.get("name") for k in ("modules", "loads") for i in (raw.get(k) or [])
+             if isinstance(i, dict) and isinstance(i.get("name"), str)]
+    raise ScenarioError(f"--set {dotted}: {head!r} is not a top-level key, module or load"
+                        f"{closest(head, list(RESERVED) + names)}")
+
+
+def _named(items, name):
+    for index, item in enumerate(items or []):
+        if isinstance(item, dict) and item.get("name") == name:
+            return index
+    return None
+
+
+def _walk(raw, path, rest, dotted):
+    node = raw
+    for key in path:
+        node = node[key] if isinstance(node, (dict, list)) else None
+    for part in rest:
+        if isinstance(node, list):
+            index = _named(node, part)
+            if index is None and part.isdigit() and int(part) < len(node):
+                index = int(part)
+            if index is None:
+                names = [i.get("name") for i in node if isinstance(i, dict)]
+                raise ScenarioError(f"--set {dotted}: no item {part!r}{closest(part, names)}")
+            path, node = path + (index,), node[index]
+        elif isinstance(node, dict) or node is None:
+            path, node = path + (part,), (node or {}).get(part)
+        else:
+            raise ScenarioError(f"--set {dotted}: cannot go inside the value at {part!r}")
+    return path
+
+
+def _assign(raw, path, value):
+    node = raw
+    for key in path[:-1]:
+        if isinstance(node, dict):
+            node = node.setdefault(key, {})
+        else:
+            node = node[key]
+    if isinstance(node, dict):
+        node[path[-1]] = value
+    elif isinstance(node, list) and isinstance(path[-1], int):
+        node[path[-1]] = value
+    else:
+        raise ScenarioError(f"--set {'.'.join(map(str, path))}: not a mapping")

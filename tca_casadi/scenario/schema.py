@@ -1,0 +1,328 @@
+"""The scenario schema (SPEC section 7): pydantic models, every quantity unit-aware, unknown keys
+rejected. Values are stored in SI (temperatures in degC) after validation.
+
+Cross-references (materials, TCA types, module names, routes inside the body) are checked in
+:mod:`tca_casadi.scenario.checks`, where the file lines are known.
+"""
+import math
+from typing import Annotated, Literal, Optional, Union
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, model_validator
+
+from ..units import to_si
+
+
+def _quantity(kind):
+    return BeforeValidator(lambda value: to_si(value, kind))
+
+
+def _vector(kind, size):
+    def convert(value):
+        if not isinstance(value, (list, tuple)):
+            raise ValueError(f"expected a list of {size} values, got {value!r}")
+        if len(value) != size:
+            raise ValueError(f"expected a list of {size} values, got {len(value)}")
+        return tuple(to_si(item, kind) for item in value)
+    return BeforeValidator(convert)
+
+
+Length = Annotated[float, _quantity("length")]
+PositiveLength = Annotated[float, _quantity("length"), Field(gt=0)]
+NonNegativeLength = Annotated[float, _quantity("length"), Field(ge=0)]
+Angle = Annotated[float, _quantity("angle")]
+Temperature = Annotated[float, _quantity("temperature"), Field(ge=-273.15)]
+Force = Annotated[float, _quantity("force")]
+NonNegativeMass = Annotated[float, _quantity("mass"), Field(ge=0)]
+Number = Annotated[float, _quantity("dimensionless")]
+Vector3Length = Annotated[tuple[float, float, float], _vector("length", 3)]
+Vector3 = Annotated[tuple[float, float, float], _vector("dimensionless", 3)]
+Vector3Force = Annotated[tuple[float, float, float], _vector("force", 3)]
+Vector3Moment = Annotated[tuple[float, float, float], _vector("moment", 3)]
+Vector3ForcePerLength = Annotated[tuple[float, float, float], _vector("force_per_length", 3)]
+Vector3MomentPerLength = Annotated[tuple[float, float, float], _vector("moment_per_length", 3)]
+Vector3Acceleration = Annotated[tuple[float, float, float], _vector("acceleration", 3)]
+Vector3Curvature = Annotated[tuple[float, float, float], _vector("curvature", 3)]
+Quaternion = Annotated[tuple[float, float, float, float], _vector("dimensionless", 4)]
+
+
+class Strict(BaseModel):
+    """Base of every scenario model: unknown keys are errors, numbers must be finite."""
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=False)
+
+
+# ----------------------------------------------------------------------------- orientation
+class Orientation(Strict):
+    """A rotation given as axis + angle, or as a quaternion ``[w, x, y, z]`` (normalised)."""
+    axis: Optional[Vector3] = None
+    angle: Optional[Angle] = None
+    quaternion: Optional[Quaternion] = None
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        if self.quaternion is not None:
+            if self.axis is not None or self.angle is not None:
+                raise ValueError("give either 'quaternion' or 'axis' + 'angle', not both")
+            if math.sqrt(sum(q * q for q in self.quaternion)) < 1e-12:
+                raise ValueError("quaternion must not be zero")
+        elif (self.axis is None) != (self.angle is None):
+            raise ValueError("'axis' and 'angle' go together")
+        elif self.axis is not None and math.sqrt(sum(a * a for a in self.axis)) < 1e-12:
+            raise ValueError("rotation axis must not be zero")
+        return self
+
+    def as_quaternion(self):
+        """Unit quaternion ``(w, x, y, z)``."""
+        if self.quaternion is not None:
+            norm = math.sqrt(sum(q * q for q in self.quaternion))
+            return tuple(q / norm for q in self.quaternion)
+        if self.axis is None:
+            return (1.0, 0.0, 0.0, 0.0)
+        norm = math.sqrt(sum(a * a for a in self.axis))
+        half = 0.5 * self.angle
+        return (math.cos(half),) + tuple(math.sin(half) * a / norm for a in self.axis)
+
+
+class Base(Strict):
+    """Pose of the first module's base in the global frame."""
+    position: Vector3Length = (0.0, 0.0, 0.0)
+    orientation: Orientation = Field(default_factory=Orientation)
+
+
+# ----------------------------------------------------------------------------- materials
+class Material(Strict):
+    """Isotropic body material. Shear modulus from ``poisson_ratio`` (default 0.5: G = E/3, the
+    paper's choice) unless ``shear_modulus`` is given."""
+    youngs_modulus: Annotated[float, _quantity("pressure"), Field(gt=0)]
+    poisson_ratio: Optional[Annotated[float, _quantity("dimensionless"), Field(gt=-1, le=0.5)]] = None
+    shear_modulus: Optional[Annotated[float, _quantity("pressure"), Field(gt=0)]] = None
+    density: Annotated[float, _quantity("density"), Field(ge=0)] = 0.0
+
+    @model_validator(mode="after")
+    def _one_shear(self):
+        if self.poisson_ratio is not None and self.shear_modulus is not None:
+            raise ValueError("give either 'poisson_ratio' or 'shear_modulus', not both")
+        return self
+
+    def shear(self):
+        """Shear modulus G [Pa]."""
+        if self.shear_modulus is not None:
+            return self.shear_modulus
+        nu = 0.5 if self.poisson_ratio is None else self.poisson_ratio
+        return self.youngs_modulus / (2.0 * (1.0 + nu))
+
+
+class UntwistFit(Strict):
+    """Fiber untwist per unit fiber length, ``c2 T^2 + c1 T + c0`` [rad/m], T in degC."""
+    c2: Number = -0.0161
+    c1: Number = 0.3338
+    c0: Number = -7.7311
+
+
+class ShearModulusFit(Strict):
+    """TCA fiber shear modulus ``a2 F^2 + a1 F + a0`` [Pa], F the tension in N."""
+    a2: Annotated[float, _quantity("pressure_per_force2")] = 37.58e6
+    a1: Annotated[float, _quantity("pressure_per_force")] = 111.33e6
+    a0: Annotated[float, _quantity("pressure"), Field(gt=0)] = 0.85e6
+
+
+class TcaType(Strict):
+    """Geometry and thermo-mechanical law of a TCA (SPEC section 4); defaults are the paper's."""
+    fiber_radius: PositiveLength
+    coil_radius: PositiveLength
+    pitch_angle: Annotated[float, _quantity("angle"), Field(gt=0, lt=math.pi / 2)]
+    fiber_length: Optional[PositiveLength] = None
+    reference_temperature: Temperature = 25.0
+    max_temperature: Temperature = 150.0
+    untwist: UntwistFit = Field(default_factory=UntwistFit)
+    shear_modulus: ShearModulusFit = Field(default_factory=ShearModulusFit)
+
+    @model_validator(mode="after")
+    def _geometry(self):
+        if self.coil_radius <= self.fiber_radius:
+            raise ValueError(f"coil_radius ({self.coil_radius * 1e3:g} mm) must be larger than "
+                             f"fiber_radius ({self.fiber_radius * 1e3:g} mm)")
+        if self.max_temperature <= self.reference_temperature:
+            raise ValueError("max_temperature must be above reference_temperature")
+        return self
+
+
+# ----------------------------------------------------------------------------- sections
+class Circle(Strict):
+    shape: Literal["circle"]
+    diameter: PositiveLength
+
+
+class Rectangle(Strict):
+    """Width along body x, height along body y. ``torsion``: Saint-Venant's constant (default)
+    or the paper's polar ``J = Ix + Iy``."""
+    shape: Literal["rectangle"]
+    width: PositiveLength
+    height: PositiveLength
+    torsion: Literal["saint_venant", "polar"] = "saint_venant"
+
+
+Outline = Annotated[Union[Circle, Rectangle], Field(discriminator="shape")]
+
+
+class CircleSection(Circle):
+    envelope: Optional[Outline] = None
+
+
+class RectangleSection(Rectangle):
+    envelope: Optional[Outline] = None
+
+
+#: ``envelope`` is the outline of the body the channels must lie in, when the stiffness-equivalent
+#: section is smaller than the real body (the paper's bending module); default: the section.
+CrossSection = Annotated[Union[CircleSection, RectangleSection], Field(discriminator="shape")]
+
+
+# ----------------------------------------------------------------------------- routes
+Span = Annotated[tuple[float, float], _vector("length", 2)]
+
+
+class Straight(Strict):
+    """``r = radius [cos(angle), sin(angle), 0]``."""
+    kind: Literal["straight"]
+    radius: NonNegativeLength
+    angle: Angle = 0.0
+    span: Optional[Span] = None
+
+
+class Helix(Strict):
+    """``r = radius [cos b, sin b, 0]``, ``b = phase + 2 pi turns (s - s_a)/(s_b - s_a)``."""
+    kind: Literal["helix"]
+    radius: PositiveLength
+    turns: Number
+    phase: Angle = 0.0
+    span: Optional[Span] = None
+
+    @model_validator(mode="after")
+    def _turns(self):
+        if self.turns == 0:
+            raise ValueError("a helix needs nonzero 'turns' (use kind: straight)")
+        return self
+
+
+class Curve(Strict):
+    """Points ``[s, x, y]`` through which a C2 cubic spline passes; the span defaults to the
+    points' range of s."""
+    kind: Literal["curve"]
+    points: list[Annotated[tuple[float, float, float], _vector("length", 3)]] = Field(min_length=2)
+    span: Optional[Span] = None
+
+    @model_validator(mode="after")
+    def _increasing(self):
+        s = [point[0] for point in self.points]
+        if any(b <= a for a, b in zip(s, s[1:])):
+            raise ValueError("curve points must have strictly increasing arc length s")
+        return self
+
+
+Route = Annotated[Union[Straight, Helix, Curve], Field(discriminator="kind")]
+
+
+# ----------------------------------------------------------------------------- actuators
+class Tca(Strict):
+    """A TCA: tension unknown, fixed by the TCA law at ``temperature`` [degC]."""
+    name: str = Field(min_length=1)
+    kind: Literal["tca"]
+    type: str
+    route: Route
+    temperature: Temperature = 25.0
+
+
+class Tendon(Strict):
+    """A tendon with prescribed ``tension`` [N]."""
+    name: str = Field(min_length=1)
+    kind: Literal["tendon"]
+    route: Route
+    tension: Force = 0.0
+
+
+Actuator = Annotated[Union[Tca, Tendon], Field(discriminator="kind")]
+
+
+class Connector(Strict):
+    """Rigid piece between the previous module's tip and this module's base: offset and rotation
+    in the previous tip frame, a mass at ``center_of_mass`` (default: half the offset)."""
+    offset: Vector3Length = (0.0, 0.0, 0.0)
+    rotation: Orientation = Field(default_factory=Orientation)
+    mass: NonNegativeMass = 0.0
+    center_of_mass: Optional[Vector3Length] = None
+
+
+class Module(Strict):
+    """One Cosserat rod of the chain (SPEC sections 2 and 5)."""
+    name: str = Field(min_length=1)
+    length: PositiveLength
+    material: str
+    cross_section: CrossSection
+    actuators: list[Actuator] = Field(default_factory=list)
+    precurvature: Vector3Curvature = (0.0, 0.0, 0.0)
+    connector: Optional[Connector] = None
+
+
+# ----------------------------------------------------------------------------- loads
+Where = Union[Literal["end", "start"], Annotated[float, _quantity("length"), Field(ge=0)]]
+
+
+class PointLoad(Strict):
+    """A force and moment at one arc length of a module, in the global or body frame."""
+    name: str = Field(min_length=1)
+    kind: Literal["point"]
+    module: str
+    at: Where = "end"
+    force: Vector3Force = (0.0, 0.0, 0.0)
+    moment: Vector3Moment = (0.0, 0.0, 0.0)
+    frame: Literal["global", "body"] = "global"
+
+
+class MassLoad(Strict):
+    """A point mass on the centerline: its weight ``mass * gravity`` acts there."""
+    name: str = Field(min_length=1)
+    kind: Literal["mass"]
+    module: str
+    at: Where = "end"
+    mass: NonNegativeMass
+
+
+class DistributedLoad(Strict):
+    """Force and moment per unit reference length over a span (default: the whole module)."""
+    name: str = Field(min_length=1)
+    kind: Literal["distributed"]
+    module: str
+    span: Optional[Span] = None
+    force: Vector3ForcePerLength = (0.0, 0.0, 0.0)
+    moment: Vector3MomentPerLength = (0.0, 0.0, 0.0)
+    frame: Literal["global", "body"] = "global"
+
+
+Load = Annotated[Union[PointLoad, MassLoad, DistributedLoad], Field(discriminator="kind")]
+
+
+# ----------------------------------------------------------------------------- solver
+class SolverOptions(Strict):
+    """How to discretise and solve (SPEC section 6)."""
+    method: Literal["collocation"] = "collocation"
+    intervals: int = Field(default=12, ge=1, le=2000)
+    degree: int = Field(default=4, ge=1, le=9)
+    scheme: Literal["legendre", "radau"] = "legendre"
+    tolerance: float = Field(default=1e-10, gt=0, lt=1e-2)
+    max_iterations: int = Field(default=200, ge=1)
+    continuation: Literal["auto", "always", "never"] = "auto"
+
+
+class Scenario(Strict):
+    """A whole robot: modules in series from a base, loads, gravity and solver options."""
+    name: str = "scenario"
+    description: str = ""
+    gravity: Vector3Acceleration = (0.0, 0.0, -9.81)
+    base: Base = Field(default_factory=Base)
+    materials: dict[str, Material]
+    tca_types: dict[str, TcaType] = Field(default_factory=dict)
+    modules: list[Module] = Field(min_length=1)
+    loads: list[Load] = Field(default_factory=list)
+    solver: SolverOptions = Field(default_factory=SolverOptions)
+    _raw: Optional[dict] = PrivateAttr(default=None)
+    _sources: object = PrivateAttr(default=None)

@@ -1,0 +1,134 @@
+"""A thin orchestrator: scenario -> robot model -> solver (built once, cached) -> solution.
+
+    sim = Simulation.from_file("scenarios/bending_module.yaml")
+    first = sim.solve()
+    sim.set("bending.tca2.temperature", 110)      # a parameter: no rebuild
+    second = sim.solve(warm_start=first)
+"""
+import logging
+
+
+from .errors import ScenarioError
+from .model import Robot
+from .scenario import load_scenario
+from .scenario.loader import validate
+from .scenario.overrides import apply_overrides
+from .solvers import CollocationSolver
+
+log = logging.getLogger(__name__)
+
+SOLVERS = {"collocation": CollocationSolver}
+
+
+class Simulation:
+    """Holds a scenario, its robot model, the current parameter values and the built solver."""
+
+    def __init__(self, scenario, method=None):
+        self.scenario = scenario
+        self.robot = Robot.from_scenario(scenario)
+        self.params = self.robot.values.copy()
+        self.method = method or scenario.solver.method
+        self._solvers = {}
+        self.last = None
+
+    @classmethod
+    def from_file(cls, source, overrides=(), method=None):
+        """Load (YAML path, YAML text or dict), apply ``overrides``, build the model."""
+        return cls(load_scenario(source, overrides), method=method)
+
+    # ------------------------------------------------------------------ parameters
+    def set(self, path, value):
+        """Set a scenario value by dotted path (units allowed: ``"110 degC"``).
+
+        A parameter (temperature, tension, load, gravity, base pose) changes only the parameter
+        vector; anything else (a length, a route, the mesh) rebuilds the model and solver.
+        """
+        raw = apply_overrides(self.scenario._raw, {path: value}, self.scenario._sources)
+        scenario = validate(raw, self.scenario._sources)
+        if self.robot.structure_key(scenario) == self.robot.structure_key(self.scenario):
+            self.scenario = scenario
+            self.params = self.robot.parameter_vector(scenario)
+            return
+        log.info("%s changes the structure: rebuilding", path)
+        self.__init__(scenario, self.method)
+
+    def set_parameter(self, name, value):
+        """Fast path: set a parameter-vector entry (``robot.layout`` name) to an SI value."""
+        if name not in self.robot.layout:
+            raise ScenarioError(f"{name!r} is not a parameter; parameters: {', '.join(self.robot.layout.names())}")
+        self.params[self.robot.layout[name]] = value
+
+    def get_parameter(self, name):
+        value = self.params[self.robot.layout[name]]
+        return float(value[0]) if value.size == 1 else value.copy()
+
+    # ------------------------------------------------------------------ solving
+    def solver(self, method=None):
+        """The solver for ``method`` (built on first use, then reused)."""
+        method = method or self.method
+        if method not in self._solvers:
+            if method not in SOLVERS:
+                raise ScenarioError(f"unknown solver method {method!r}; available: {', '.join(SOLVERS)}")
+            self._solvers[method] = SOLVERS[method](self.robot, self.scenario.solver)
+        return self._solvers[method]
+
+    def solve(self, warm_start=None, method=None, continuation=None):
+        """Equilibrium at the current parameters.
+
+        ``warm_start``: a previous Solution, or ``"last"``. ``continuation``: ``"auto"`` (default
+        from the scenario) continues from the unloaded reference state when a cold solve fails or
+        leaves a TCA in compression; ``"always"``; ``"never"``.
+        """
+        solver = self.solver(method)
+        continuation = continuation or self.scenario.solver.continuation
+        initial = self.last if warm_start == "last" else warm_start
+        if continuation == "always":
+            solution = self.continue_from_rest(solver)
+        else:
+            solution = solver.solve(self.params, initial)
+            if continuation == "auto" and initial is None and _needs_continuation(solution):
+                solution = _better(solution, self.continue_from_rest(solver))
+        self.last = solution
+        return solution
+
+    def continue_from_rest(self, solver, first_step=0.25, min_step=1e-3):
+        """Follow ``P(lam) = P_rest + lam (P - P_rest)`` from the reference state (lam = 0, exact)
+        to lam = 1, warm-starting each step; halve the step on failure."""
+        target, rest = self.params.copy(), self.robot.rest_parameters(self.params)
+        solution = solver.solve(rest)
+        lam, step, steps = 0.0, first_step, 0
+        while lam < 1.0 and solution.converged:
+            trial_lam = min(1.0, lam + step)
+            trial = solver.solve(rest + trial_lam * (target - rest), solution)
+            steps += 1
+            if trial.converged:
+                lam, solution, step = trial_lam, trial, min(0.5, 1.5 * step)
+            elif step / 2 >= min_step:
+                step /= 2
+            else:
+                trial.message = (f"continuation from the reference state stalled at "
+                                 f"lambda = {lam:.4f} (step below {min_step}): {trial.message}")
+                return trial
+        solution.message += f" (continuation from the reference state, {steps} steps)"
+        return solution
+
+
+def _needs_continuation(solution):
+    return (not solution.converged) or any(
+        a.kind == "tca" and a.tension < 0 for a in solution.actuators.values())
+
+
+def _better(direct, continued):
+    """Prefer the continued solution when it converged (it lies on the branch connected to the
+    unloaded state); otherwise whichever converged."""
+    if continued.converged:
+        return continued
+    return direct if direct.converged else continued
+
+
+def solve(source, overrides=(), **options):
+    """One call: load a scenario and solve it. Returns a :class:`Solution`."""
+    return Simulation.from_file(source, overrides).solve(**options)
+
+
+__all__ = ["Simulation", "solve"]

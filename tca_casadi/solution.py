@@ -1,0 +1,181 @@
+"""The result of a solve: status, per-module arrays, tip pose, actuator table; JSON/NPZ export.
+
+Arrays are shaped ``(3, n)`` (rotations ``(3, 3, n)``), SI units, global frame unless named
+``*_body``. The JSON keys follow SPEC section 8.
+"""
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+from .errors import SolverError
+from .model.rotations import matrix_to_quaternion
+
+
+@dataclass
+class ModuleResult:
+    """Arrays of one module at its nodes (arc lengths ``s`` nondecreasing; a breakpoint where the
+    strain jumps appears twice)."""
+    name: str
+    s: np.ndarray             # (n,) [m]
+    p: np.ndarray             # (3, n) [m]
+    h: np.ndarray             # (4, n) non-unit quaternion
+    R: np.ndarray             # (3, 3, n)
+    u: np.ndarray             # (3, n) [1/m] body frame
+    v: np.ndarray             # (3, n) [-] body frame
+    force: np.ndarray         # (3, n) [N] internal force, global frame
+    moment: np.ndarray        # (3, n) [N m] internal moment, global frame
+    base_reaction: dict       # {'force': (3,), 'moment': (3,)} on the module's base, global frame
+    outline: np.ndarray = None  # (3, k) body-frame outline of the body's cross-section [m]
+
+    @property
+    def tip_position(self):
+        return self.p[:, -1]
+
+    @property
+    def tip_rotation(self):
+        return self.R[:, :, -1]
+
+
+@dataclass
+class ActuatorResult:
+    """One actuator's table row (SI, temperature degC) and its path (3, n) in the global frame."""
+    key: str
+    kind: str
+    temperature: Optional[float]
+    reference_temperature: Optional[float]
+    tension: float
+    length: float
+    reference_length: float
+    free_stroke: Optional[float]
+    path: np.ndarray
+
+    @property
+    def stroke(self):
+        return self.length - self.reference_length
+
+    @property
+    def heated(self):
+        return self.kind == "tca" and self.temperature > self.reference_temperature + 0.5
+
+    def as_dict(self):
+        return {"kind": self.kind, "temperature": self.temperature, "tension": self.tension,
+                "length": self.length, "reference_length": self.reference_length,
+                "stroke": self.stroke, "free_stroke": self.free_stroke}
+
+
+@dataclass
+class Solution:
+    """An equilibrium (or a failed attempt: ``converged`` is False, never hidden)."""
+    converged: bool
+    status: str
+    message: str
+    method: str
+    max_residual: float
+    iterations: int
+    solve_time_s: float
+    build_time_s: float
+    modules: list
+    actuators: dict
+    warnings: list = field(default_factory=list)
+    parameters: Optional[np.ndarray] = None
+    parameter_names: Optional[dict] = None
+    raw: dict = field(default_factory=dict, repr=False)
+    scenario_name: str = ""
+
+    # ------------------------------------------------------------------ tip
+    @property
+    def tip_position(self):
+        return self.modules[-1].tip_position
+
+    @property
+    def tip_rotation(self):
+        return self.modules[-1].tip_rotation
+
+    @property
+    def tip_quaternion(self):
+        return matrix_to_quaternion(self.tip_rotation)
+
+    @property
+    def tensions(self):
+        """``{MODULE.ACTUATOR: tension [N]}``."""
+        return {key: a.tension for key, a in self.actuators.items()}
+
+    def raise_if_failed(self):
+        """Raise :class:`SolverError` (keeping this solution) unless converged."""
+        if not self.converged:
+            raise SolverError(f"{self.method} did not converge: {self.message}", self)
+        return self
+
+    # ------------------------------------------------------------------ export
+    def to_dict(self):
+        """JSON-ready dict with the keys of SPEC section 8 (SI units)."""
+        return {
+            "scenario": self.scenario_name,
+            "converged": bool(self.converged),
+            "status": self.status,
+            "message": self.message,
+            "method": self.method,
+            "max_residual": float(self.max_residual),
+            "iterations": int(self.iterations),
+            "solve_time_s": float(self.solve_time_s),
+            "build_time_s": float(self.build_time_s),
+            "tip": _pose(self.tip_position, self.tip_rotation),
+            "modules": {m.name: {"tip": _pose(m.tip_position, m.tip_rotation),
+                                 "base_reaction": _listify(m.base_reaction)} for m in self.modules},
+            "actuators": {key: a.as_dict() for key, a in self.actuators.items()},
+            "parameters": ({name: np.atleast_1d(self.parameters[sl]).tolist()
+                            for name, sl in self.parameter_names.items()}
+                           if self.parameter_names is not None else {}),
+            "warnings": list(self.warnings),
+        }
+
+    def save(self, directory):
+        """Write ``solution.json`` and ``arrays.npz`` into ``directory``; return their paths."""
+        directory = Path(directory)
+        directory.mkdir(parents=True, exist_ok=True)
+        json_path = directory / "solution.json"
+        json_path.write_text(json.dumps(self.to_dict(), indent=2))
+        npz_path = directory / "arrays.npz"
+        np.savez(npz_path, **self.arrays())
+        return json_path, npz_path
+
+    def arrays(self):
+        """Flat ``{name: array}``: ``MODULE/s``, ``MODULE/p``, ... and ``ACTUATOR/path``."""
+        out = {}
+        for m in self.modules:
+            for name in ("s", "p", "h", "R", "u", "v", "force", "moment"):
+                out[f"{m.name}/{name}"] = getattr(m, name)
+        for key, a in self.actuators.items():
+            out[f"{key}/path"] = a.path
+        return out
+
+    def summary(self):
+        """A few lines for the terminal."""
+        state = "converged" if self.converged else "NOT CONVERGED"
+        tip = self.tip_position * 1e3
+        lines = [f"{self.scenario_name}: {state} ({self.method}, {self.iterations} iterations, "
+                 f"residual {self.max_residual:.1e}, solve {self.solve_time_s * 1e3:.1f} ms, "
+                 f"build {self.build_time_s * 1e3:.0f} ms)",
+                 f"  tip position [mm]: {tip[0]:+.4f} {tip[1]:+.4f} {tip[2]:+.4f}",
+                 f"  {'actuator':<22}{'T [degC]':>9}{'F [mN]':>10}{'stroke [mm]':>13}{'free [mm]':>11}"]
+        for key, a in self.actuators.items():
+            temp = f"{a.temperature:9.1f}" if a.temperature is not None else f"{'-':>9}"
+            free = f"{a.free_stroke * 1e3:11.4f}" if a.free_stroke is not None else f"{'-':>11}"
+            lines.append(f"  {key:<22}{temp}{a.tension * 1e3:10.4f}{a.stroke * 1e3:13.4f}{free}")
+        lines += [f"  warning: {w}" for w in self.warnings]
+        if not self.converged:
+            lines.append(f"  message: {self.message}")
+        return "\n".join(lines)
+
+
+def _pose(position, rotation):
+    return {"position": np.asarray(position).tolist(),
+            "quaternion": matrix_to_quaternion(rotation).tolist(),
+            "rotation_matrix": np.asarray(rotation).tolist()}
+
+
+def _listify(d):
+    return {k: np.asarray(v).tolist() for k, v in d.items()}

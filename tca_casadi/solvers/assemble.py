@@ -1,0 +1,83 @@
+"""Turn a solver's raw result (node states, tensions, lengths) into a :class:`Solution`.
+Shared by every solver so that all report the same quantities the same way."""
+import numpy as np
+
+from ..model.rotations import ROTATION
+from ..solution import ActuatorResult, ModuleResult, Solution
+
+#: a TCA tension below this [N] counts as compression
+COMPRESSION_TOLERANCE = 1e-9
+
+
+def module_result(module, s, states, base_wrench_body):
+    """:class:`ModuleResult` from node states (13, n) at arc lengths s (n,)."""
+    n = states.shape[1]
+    R = np.stack([np.array(ROTATION(states[3:7, k])) for k in range(n)], axis=2)
+    wrench = module.stiffness[:, None] * (states[7:13] - module.xi_star[:, None])
+    moment = np.einsum("ijk,jk->ik", R, wrench[0:3])
+    force = np.einsum("ijk,jk->ik", R, wrench[3:6])
+    R0 = R[:, :, 0]
+    reaction = {"force": -R0 @ base_wrench_body[3:6], "moment": -R0 @ base_wrench_body[0:3]}
+    return ModuleResult(module.name, s, states[0:3], states[3:7], R, states[7:10], states[10:13],
+                        force, moment, reaction, section_outline(module.section))
+
+
+def section_outline(section, points=48):
+    """Body-frame polygon (3, k) of the body's outline (the envelope where one is given)."""
+    outline = section.envelope or section
+    if outline.shape == "circle":
+        angle = np.linspace(0, 2 * np.pi, points)
+        radius = outline.diameter / 2
+        return np.vstack([radius * np.cos(angle), radius * np.sin(angle), np.zeros(points)])
+    w, h = outline.width / 2, outline.height / 2
+    return np.array([[-w, w, w, -w, -w], [-h, -h, h, h, -h], [0, 0, 0, 0, 0]], dtype=float)
+
+
+def actuator_result(actuator, module_res, tension, length, temperature):
+    """:class:`ActuatorResult`: the path ``p + R r`` over the actuator's span."""
+    s_a, s_b = actuator.route.span
+    tol = 1e-12 * max(1.0, s_b)
+    inside = (module_res.s >= s_a - tol) & (module_res.s <= s_b + tol)
+    r = actuator.route.evaluate(np.clip(module_res.s[inside], s_a, s_b))[0]
+    path = module_res.p[:, inside] + np.einsum("ijk,jk->ik", module_res.R[:, :, inside], r)
+    law = actuator.law
+    return ActuatorResult(
+        key=actuator.key, kind=actuator.kind,
+        temperature=float(temperature) if law is not None else None,
+        reference_temperature=law.reference_temperature if law is not None else None,
+        tension=float(tension), length=float(length), reference_length=actuator.reference_length,
+        free_stroke=float(law.free_stroke(temperature)) if law is not None else None, path=path)
+
+
+def physics_warnings(robot, actuators):
+    """Warnings for TCAs in compression or beyond the fitted law's monotone range."""
+    out = []
+    for actuator in robot.tcas:
+        result = actuators[actuator.key]
+        if result.tension < -COMPRESSION_TOLERANCE:
+            out.append(f"{actuator.key} is in compression (F = {result.tension * 1e3:.4g} mN): "
+                       "a real TCA would buckle or go slack; the law's extension G_t(0) "
+                       "exp(F G_t'(0)/G_t(0)) was used")
+        limit = actuator.law.monotone_limit
+        if result.tension > limit:
+            out.append(f"{actuator.key} tension {result.tension * 1e3:.4g} mN is beyond the "
+                       f"fit's monotone range ({limit * 1e3:.4g} mN)")
+    return out
+
+
+def build_solution(robot, params, module_data, tensions, lengths, status):
+    """Solution from ``module_data = [(s, states, base_wrench_body), ...]``, tensions per
+    actuator (list in ``robot.actuators`` order) and lengths; ``status`` holds converged,
+    status, message, method, max_residual, iterations, solve_time_s, build_time_s, raw."""
+    modules = [module_result(robot.modules[m], *data) for m, data in enumerate(module_data)]
+    actuators = {}
+    for k, actuator in enumerate(robot.actuators):
+        temperature = params[robot.layout[actuator.parameter]][0] if actuator.kind == "tca" else None
+        actuators[actuator.key] = actuator_result(actuator, modules[actuator.module], tensions[k],
+                                                  lengths[k], temperature)
+    warnings = physics_warnings(robot, actuators)
+    if not status["converged"]:
+        warnings.insert(0, f"not converged: {status['message']}")
+    return Solution(modules=modules, actuators=actuators, warnings=warnings,
+                    parameters=np.array(params, float), parameter_names=dict(robot.layout.slices),
+                    scenario_name=robot.name, **status)

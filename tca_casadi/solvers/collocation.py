@@ -1,0 +1,85 @@
+"""The collocation solver: the NLP of :mod:`tca_casadi.discretisation` solved with IPOPT.
+Built once per scenario structure; each :meth:`solve` takes new parameters and a warm start."""
+import logging
+import time
+
+import casadi as ca
+import numpy as np
+
+from ..discretisation import CollocationNLP
+from .assemble import build_solution
+from .guess import reference_guess
+
+log = logging.getLogger(__name__)
+
+
+class CollocationSolver:
+    """Direct collocation + IPOPT. ``solve(params, initial=None)`` -> :class:`Solution`."""
+    method = "collocation"
+
+    def __init__(self, robot, options):
+        start = time.perf_counter()
+        self.robot, self.options = robot, options
+        self.nlp = CollocationNLP(robot, options.intervals, options.degree, options.scheme)
+        ipopt = {"print_level": 0, "sb": "yes", "tol": options.tolerance,
+                 "constr_viol_tol": options.tolerance, "max_iter": options.max_iterations,
+                 "warm_start_init_point": "yes", "hessian_approximation": "limited-memory"}
+        self._ipopt = ca.nlpsol("collocation", "ipopt", self.nlp.problem,
+                                {"ipopt": ipopt, "print_time": False, "error_on_fail": False})
+        self._constraints = ca.Function("g", [self.nlp.w, self.nlp.P], [self.nlp.problem["g"]])
+        self.build_time_s = time.perf_counter() - start
+        self.solve_count = 0
+        log.info("built collocation NLP: %d variables in %.3f s", self.nlp.w.numel(), self.build_time_s)
+
+    def initial_guess(self, params, initial=None):
+        """Scaled start point: a previous solution's variables if compatible, else the reference shape."""
+        if initial is not None and initial.raw.get("w") is not None and \
+                initial.raw.get("method") == self.method and initial.raw["w"].size == self.nlp.scale.size:
+            return initial.raw["w"]
+        return reference_guess(self.nlp, params)
+
+    def solve(self, params, initial=None):
+        """Solve at parameter vector ``params``, warm-started from ``initial`` (a Solution)."""
+        params = np.asarray(params, dtype=float)
+        w0 = self.initial_guess(params, initial)
+        start = time.perf_counter()
+        result = self._ipopt(x0=w0, p=params, lbg=0.0, ubg=0.0, lam_g0=0.0, lam_x0=0.0)
+        elapsed = time.perf_counter() - start
+        self.solve_count += 1
+        stats = self._ipopt.stats()
+        w = np.array(result["x"]).ravel()
+        residual = float(np.max(np.abs(np.array(self._constraints(w, params))))) if w.size else 0.0
+        converged = bool(stats["success"]) and residual <= 10 * self.options.tolerance
+        status = {"converged": converged, "status": stats["return_status"],
+                  "message": _message(stats, residual, self.options.tolerance),
+                  "method": self.method, "max_residual": residual,
+                  "iterations": int(stats.get("iter_count", 0)), "solve_time_s": elapsed,
+                  "build_time_s": self.build_time_s, "raw": {"w": w, "method": self.method}}
+        return self._assemble(w, params, status)
+
+    def _assemble(self, w, params, status):
+        nlp = self.nlp
+        lengths, ends, base = (np.array(v) for v in nlp.outputs(w, params))
+        w_phys = w * nlp.scale
+        module_data = []
+        for m in range(len(self.robot.modules)):
+            idx = nlp.state_index[m]                               # (n_int, 13, d+1)
+            states = w_phys[idx.transpose(1, 0, 2).reshape(13, -1)]
+            s = nlp.node_s(m).ravel()
+            states = np.hstack([states, ends[:, m:m + 1]]) + nlp.state_offset[m][:, None]
+            s = np.append(s, self.robot.modules[m].length)
+            module_data.append((s, states, base[:, m]))
+        tensions = []
+        for actuator in self.robot.actuators:
+            if actuator.kind == "tca":
+                tensions.append(w_phys[nlp.tension_index[self.robot.tcas.index(actuator)]])
+            else:
+                tensions.append(params[self.robot.layout[actuator.parameter]][0])
+        return build_solution(self.robot, params, module_data, tensions, lengths.ravel(), status)
+
+
+def _message(stats, residual, tolerance):
+    if stats["success"] and residual <= 10 * tolerance:
+        return f"IPOPT: {stats['return_status']}"
+    return (f"IPOPT: {stats['return_status']} after {stats.get('iter_count', 0)} iterations; "
+            f"max scaled residual {residual:.2e} (tolerance {tolerance:.0e})")

@@ -1,0 +1,51 @@
+"""Initial guesses: the reference (unloaded) shape, integrated exactly for constant strains."""
+import numpy as np
+from scipy.linalg import expm
+
+from ..model.rotations import rotation_numpy
+
+
+def _hat(u):
+    return np.array([[0, -u[2], u[1]], [u[2], 0, -u[0]], [-u[1], u[0], 0]])
+
+
+def _omega(u):
+    ux, uy, uz = u
+    return np.array([[0, -ux, -uy, -uz], [ux, 0, uz, -uy], [uy, -uz, 0, ux], [uz, uy, -ux, 0]])
+
+
+def _qmul(a, b):
+    return np.r_[a[0] * b[0] - a[1:] @ b[1:], a[0] * b[1:] + b[0] * a[1:] + np.cross(a[1:], b[1:])]
+
+
+def reference_states(module, s, p0, h0):
+    """States ``[p, h, u, v]`` (13, n) of a module in its reference shape (strains xi*) at ``s``."""
+    u, v = module.xi_star[:3], module.xi_star[3:]
+    twist = np.zeros((4, 4))
+    twist[:3, :3], twist[:3, 3] = _hat(u), v
+    R0 = rotation_numpy(h0)
+    out = np.zeros((13, len(s)))
+    for k, sk in enumerate(s):
+        g = expm(twist * sk)
+        out[0:3, k] = p0 + R0 @ g[:3, 3]
+        out[3:7, k] = expm(0.5 * _omega(u) * sk) @ h0
+    out[7:13] = module.xi_star[:, None]
+    return out
+
+
+def reference_guess(nlp, params):
+    """Scaled NLP variables of the reference shape from the base pose in ``params``; F = 0."""
+    robot, layout = nlp.robot, nlp.robot.layout
+    w = np.zeros(nlp.scale.size)
+    p0 = np.asarray(params[layout["base.position"]], float)
+    h0 = np.asarray(params[layout["base.quaternion"]], float)
+    for m, module in enumerate(robot.modules):
+        if m > 0 and module.connector is not None:
+            p0 = p0 + rotation_numpy(h0) @ module.connector.offset
+            h0 = _qmul(h0, module.connector.quaternion)
+        s = nlp.node_s(m)
+        states = reference_states(module, np.append(s.ravel(), module.length), p0, h0)
+        deviation = states[:, :-1] - nlp.state_offset[m][:, None]
+        w[nlp.state_index[m].transpose(1, 0, 2).reshape(13, -1)] = deviation
+        p0, h0 = states[0:3, -1], states[3:7, -1]
+    return w / nlp.scale
