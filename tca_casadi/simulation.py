@@ -75,18 +75,21 @@ class Simulation:
     def solve(self, warm_start=None, method=None, continuation=None):
         """Equilibrium at the current parameters.
 
-        ``warm_start``: a previous Solution, or ``"last"``. ``continuation``: ``"auto"`` (default
-        from the scenario) continues from the unloaded reference state when a cold solve fails or
-        leaves a TCA in compression; ``"always"``; ``"never"``.
+        ``warm_start``: a previous Solution, or ``"last"``. ``continuation`` (default from the
+        scenario): ``"auto"`` follows the loads up from the unloaded reference state on a cold start
+        (SPEC section 6: a direct cold solve may land on a branch where TCAs push) and, after a warm
+        start that fails or leaves a TCA in compression; ``"always"``; ``"never"`` (direct solve).
         """
         solver = self.solver(method)
         continuation = continuation or self.scenario.solver.continuation
         initial = self.last if warm_start == "last" else warm_start
-        if continuation == "always":
+        if continuation == "always" or (continuation == "auto" and initial is None):
             solution = self.continue_from_rest(solver)
+            if not solution.converged and continuation == "auto":
+                solution = _better(solver.solve(self.params), solution)
         else:
             solution = solver.solve(self.params, initial)
-            if continuation == "auto" and initial is None and _needs_continuation(solution):
+            if continuation == "auto" and _needs_continuation(solution):
                 solution = _better(solution, self.continue_from_rest(solver))
         self.last = solution
         return solution
@@ -118,12 +121,11 @@ def _needs_continuation(solution):
         a.kind == "tca" and a.tension < 0 for a in solution.actuators.values())
 
 
-def _better(direct, continued):
-    """Prefer the continued solution when it converged (it lies on the branch connected to the
-    unloaded state); otherwise whichever converged."""
-    if continued.converged:
-        return continued
-    return direct if direct.converged else continued
+def _better(first, second):
+    """The converged one of two attempts; ``second`` when both or neither converged."""
+    if first.converged and not second.converged:
+        return first
+    return second
 
 
 def solve(source, overrides=(), **options):

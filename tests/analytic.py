@@ -27,7 +27,7 @@ def elastica_tip(alpha):
             return 2.0 * math.sqrt(s0) / math.sqrt(1.0 - sin_t**2)
         return quad(integrand, 0.0, 1.0, epsabs=1e-13, epsrel=1e-12, limit=200)[0]
 
-    theta0 = brentq(lambda th: length_integral(th) - math.sqrt(2.0 * alpha), 1e-9, math.pi / 2 - 1e-6,
+    theta0 = brentq(lambda th: length_integral(th) - math.sqrt(2.0 * alpha), 1e-6, 1.55,
                     xtol=1e-15)
     s0 = math.sin(theta0)
 

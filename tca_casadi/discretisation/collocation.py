@@ -38,18 +38,22 @@ class CollocationNLP:
         self.scheme = CollocationScheme.create(degree, scheme)
         self.meshes = [build_mesh(robot, m, intervals) for m in range(len(robot.modules))]
         self._declare_variables()
-        self.P = ca.SX.sym("P", robot.layout.size)
+        self.P = ca.MX.sym("P", robot.layout.size)
         self._g, self._lengths = [], [0] * len(robot.actuators)
+        self._partial_exprs = []
         self._ends, self._base_wrenches = [], []
         for m in range(len(robot.modules)):
             self._module_constraints(m)
         self._compatibility()
         g = ca.vertcat(*self._g)
-        self.problem = {"x": self.w, "p": self.P, "f": ca.SX(0), "g": g}
+        self.problem = {"x": self.w, "p": self.P, "f": ca.MX(0), "g": g}
         self.outputs = ca.Function(
             "outputs", [self.w, self.P],
             [ca.vertcat(*self._lengths), ca.horzcat(*self._ends), ca.horzcat(*self._base_wrenches)],
             ["w", "P"], ["lengths", "ends", "base_wrenches"])
+        #: scaled partial lengths implied by the states (to initialise those unknowns)
+        self.partials = ca.Function("partials", [self.w, self.P],
+                                    [ca.vertcat(*self._partial_exprs) if self._partial_exprs else ca.MX(0, 1)])
 
     # ------------------------------------------------------------------ variables
     def _declare_variables(self):
@@ -59,7 +63,7 @@ class CollocationNLP:
         for m, mesh in enumerate(self.meshes):
             module = self.robot.modules[m]
             count = len(mesh.intervals) * (d + 1) * STATE_SIZE
-            blocks.append(ca.SX.sym(f"x_{module.name}", count))
+            blocks.append(ca.MX.sym(f"x_{module.name}", count))
             # strains as deviations from xi*, scaled by stiffness: order-one internal wrenches
             per_node = np.r_[np.full(3, module.length), np.ones(4),
                              module.force_scale * module.length / module.stiffness[0:3],
@@ -70,17 +74,30 @@ class CollocationNLP:
             index = offset + np.arange(count).reshape(len(mesh.intervals), d + 1, STATE_SIZE)
             self.state_index.append(index.transpose(0, 2, 1))  # (n_int, 13, d+1)
             offset += count
+        # partial lengths: one per (actuator, interval) of each module, so that the compatibility
+        # equations touch n_int unknowns instead of every state (keeps the Jacobian sparse)
+        self._partials, self.partial_index = [], []
+        for m, mesh in enumerate(self.meshes):
+            module = self.robot.modules[m]
+            count = len(module.actuators) * len(mesh.intervals)
+            block = ca.MX.sym(f"l_{module.name}", count)
+            self._partials.append(ca.reshape(block, len(module.actuators), len(mesh.intervals)) * module.length)
+            blocks.append(block)
+            scales.append(np.full(count, module.length))
+            self.partial_index.append(offset + np.arange(count))
+            offset += count
         tcas = self.robot.tcas
-        blocks.append(ca.SX.sym("F", len(tcas)))
+        blocks.append(ca.MX.sym("F", len(tcas)))
         scales.append(np.array([self.robot.modules[a.module].force_scale for a in tcas]))
         self.tension_index = offset + np.arange(len(tcas))
         self.w = ca.vertcat(*blocks)
         self.scale = np.concatenate(scales)
         # deviation states [p, h, u - u*, v - v*] in SI units, per interval (13, d+1)
-        w_phys = self.w * ca.DM(self.scale)
-        self._states = [[ca.reshape(w_phys[_flat(idx)], STATE_SIZE, d + 1)
-                         for idx in self.state_index[m]] for m in range(len(self.meshes))]
-        self._tensions = w_phys[self.tension_index.tolist()] if len(tcas) else ca.SX(0, 1)
+        self._states = []
+        for m, block in enumerate(blocks[:len(self.meshes)]):
+            matrix = ca.reshape(block, STATE_SIZE, -1)
+            self._states.append(ca.diag(ca.DM(self.node_scale[m])) @ matrix)
+        self._tensions = blocks[-1] * ca.DM(scales[-1]) if len(tcas) else ca.MX(0, 1)
 
     def full_state(self, m, deviation):
         """``[p, h, u, v]`` from the deviation state ``[p, h, u - u*, v - v*]``."""
@@ -97,67 +114,83 @@ class CollocationNLP:
 
     # ------------------------------------------------------------------ one module
     def _module_constraints(self, m):
+        """Collocation equations of module m (one mapped call of the rod Function over all its
+        collocation points), then the interval links and the module's end condition."""
         module, mesh, scheme = self.robot.modules[m], self.meshes[m], self.scheme
-        rod = rod_equations(module.stiffness, module.xi_star, len(module.actuators))
-        fs, length = module.force_scale, module.length
-        eq_scale = ca.DM(np.r_[np.ones(3), np.full(4, length), np.full(3, 1 / fs), np.full(3, length / fs)])
-        states = self._states[m]
+        d, n_int = scheme.degree, len(mesh.intervals)
+        X = self._states[m]                                   # (13, n_int (d+1)) deviation states
+        steps = np.array([s1 - s0 for s0, s1 in mesh.intervals])
         if m == 0:
-            self._g.append((states[0][P_, 0] - self.param("base.position")) / length)
-            self._g.append(states[0][H_, 0] - self.param("base.quaternion"))
-        self._base_wrenches.append(self._base_wrench(m, states[0][:, 0]))
-        for i, (s0, s1) in enumerate(mesh.intervals):
-            X, step = states[i], s1 - s0
-            loads = self._distributed(m, 0.5 * (s0 + s1), X)
-            tensions = self._active_tensions(m, 0.5 * (s0 + s1))
-            for j in range(1, scheme.degree + 1):
-                s = s0 + scheme.tau[j] * step
-                dX = (X[:, 1:] - X[:, 0] @ ca.DM.ones(1, scheme.degree)) @ ca.DM(scheme.C[1:, j]) / step
-                kin, eq, speed = rod(self.full_state(m, X[:, j]), dX[7:13], self._route_data(m, s, tensions[1]),
-                                     tensions[0], *loads)
-                self._g.append(ca.vertcat(dX[0:7] - kin, eq) * eq_scale)
-                self._accumulate_lengths(m, tensions[1], speed, step * scheme.weights[j - 1])
-            end = X @ ca.DM(scheme.D)
-            if i + 1 < len(mesh.intervals):
-                self._link_intervals(m, s1, end, states[i + 1][:, 0])
-            else:
-                self._ends.append(end)
-                self._module_end(m, end)
+            self._g.append((X[P_, 0] - self.param("base.position")) / module.length)
+            self._g.append(X[H_, 0] - self.param("base.quaternion"))
+        self._base_wrenches.append(self._base_wrench(m, X[:, 0]))
+        nodes = mesh.node_s(scheme)                           # (n_int, d+1)
+        colloc = (np.arange(n_int)[:, None] * (d + 1) + np.arange(1, d + 1)).ravel().tolist()
+        s_colloc = nodes[:, 1:].ravel()
+        interval_of = np.repeat(np.arange(n_int), d)
+        derivative = _derivative_matrix(scheme, steps)        # (n_int (d+1), n_int d)
+        dX = X @ derivative
+        Xc = X[:, colloc]
+        active = self._active_mask(m, nodes[:, 0] + 0.5 * steps)[:, interval_of]   # (nA, npts)
+        rod = rod_equations(module.stiffness, module.xi_star, len(module.actuators)).map(len(colloc))
+        kin, eq, speed = rod(Xc, dX[7:13, :],
+                             self._route_data(m, s_colloc, active), self._tension_field(m, active),
+                             *self._distributed(m, nodes[:, 0] + 0.5 * steps, interval_of))
+        fs, length = module.force_scale, module.length
+        eq_scale = np.r_[np.ones(3), np.full(4, length), np.full(3, 1 / fs), np.full(3, length / fs)]
+        self._g.append(ca.vec(ca.diag(ca.DM(eq_scale)) @ ca.vertcat(dX[0:7, :] - kin, eq)))
+        if module.actuators:
+            per_interval = ca.DM(_quadrature_matrix(scheme, steps))         # (npts, n_int)
+            partial = (speed * ca.DM(active)) @ per_interval                  # (nA, n_int)
+            self._partial_exprs.append(ca.vec(partial) / module.length)
+            self._g.append(ca.vec(self._partials[m] - partial) / module.length)
+        for k, actuator in enumerate(module.actuators):
+            position = self.robot.actuators.index(actuator)
+            self._lengths[position] = ca.sum2(self._partials[m][k, :])
+        ends = X @ ca.DM(_end_matrix(scheme, n_int))           # (13, n_int)
+        self._link_intervals(m, ends, X[:, ((np.arange(1, n_int)) * (d + 1)).tolist()])
+        self._ends.append(ends[:, -1])
+        self._module_end(m, ends[:, -1])
 
     def _route_data(self, m, s, active):
+        """Route values ``[r; r'; r'']`` (9, nA npts) at the points ``s`` (zero where inactive)."""
         module = self.robot.modules[m]
-        data = np.zeros((9, len(module.actuators)))
+        data = np.zeros((9, len(module.actuators), len(s)))
         for k, actuator in enumerate(module.actuators):
-            if active[k]:
-                r, dr, ddr = actuator.route.evaluate(s)
-                data[:, k] = np.concatenate([r[:, 0], dr[:, 0], ddr[:, 0]])
-        return ca.DM(data)
+            r, dr, ddr = actuator.route.evaluate(np.clip(s, *actuator.route.span))
+            data[:, k, :] = np.vstack([r, dr, ddr]) * active[k]
+        return ca.DM(data.reshape(9, -1, order="F"))
 
-    def _active_tensions(self, m, s_mid):
+    def _active_mask(self, m, s_mid):
+        """(nA, n_int) 1 where the actuator runs through the interval with midpoint ``s_mid``."""
         module = self.robot.modules[m]
-        active = [a.route.span[0] < s_mid < a.route.span[1] for a in module.actuators]
-        tension = [self.tension_of(a) if on else 0 for a, on in zip(module.actuators, active)]
-        return (ca.vertcat(*tension) if tension else ca.SX(0, 1)), active
+        mask = np.zeros((len(module.actuators), len(s_mid)))
+        for k, a in enumerate(module.actuators):
+            mask[k] = (a.route.span[0] < s_mid) & (s_mid < a.route.span[1])
+        return mask
 
-    def _distributed(self, m, s_mid, X):
+    def _tension_field(self, m, active):
+        """(nA, npts) tension of each actuator at each collocation point (0 where absent)."""
         module = self.robot.modules[m]
-        f_glob = module.weight_density * self.param("gravity")
-        l_glob, f_body, l_body = ca.SX.zeros(3), ca.SX.zeros(3), ca.SX.zeros(3)
+        if not module.actuators:
+            return ca.DM(0, active.shape[1])
+        tension = ca.vertcat(*[self.tension_of(a) for a in module.actuators])
+        return (tension @ ca.DM.ones(1, active.shape[1])) * ca.DM(active)
+
+    def _distributed(self, m, s_mid, interval_of):
+        """Distributed loads (3, npts) each: global force (self-weight included) and moment,
+        body-frame force and moment, per collocation point."""
+        module = self.robot.modules[m]
+        ones = ca.DM.ones(1, interval_of.size)
+        fields = [module.weight_density * self.param("gravity") @ ones] + [ca.MX.zeros(3, interval_of.size)] * 3
         for load in self.robot.distributed_loads:
-            if load.module == m and load.span[0] < s_mid < load.span[1]:
-                force, moment = self.param(f"{load.name}.force"), self.param(f"{load.name}.moment")
-                if load.frame == "global":
-                    f_glob, l_glob = f_glob + force, l_glob + moment
-                else:
-                    f_body, l_body = f_body + force, l_body + moment
-        return f_glob, l_glob, f_body, l_body
-
-    def _accumulate_lengths(self, m, active, speed, weight):
-        module = self.robot.modules[m]
-        for k, actuator in enumerate(module.actuators):
-            if active[k]:
-                position = self.robot.actuators.index(actuator)
-                self._lengths[position] = self._lengths[position] + weight * speed[k]
+            if load.module != m:
+                continue
+            on = ca.DM(((load.span[0] < s_mid) & (s_mid < load.span[1]))[interval_of].astype(float)).T
+            first = 0 if load.frame == "global" else 2
+            fields[first] = fields[first] + self.param(f"{load.name}.force") @ on
+            fields[first + 1] = fields[first + 1] + self.param(f"{load.name}.moment") @ on
+        return fields
 
     # ------------------------------------------------------------------ point wrenches
     def _point_wrenches(self, m, s, before, after):
@@ -165,7 +198,7 @@ class CollocationNLP:
         anchors starting at s (evaluated with the state after s), anchors ending at s (state
         before s), point loads and point masses."""
         module = self.robot.modules[m]
-        total = ca.SX.zeros(6)
+        total = None
         tol = 1e-12 * module.length
         for actuator in module.actuators:
             s_a, s_b = actuator.route.span
@@ -173,16 +206,16 @@ class CollocationNLP:
                 if state is not None and abs(s_anchor - s) <= tol:
                     r, dr, _ = actuator.route.evaluate(s_anchor)
                     full = self.full_state(m, state)
-                    total += sign * ANCHOR_WRENCH(full[U_], full[V_], r[:, 0], dr[:, 0],
-                                                  self.tension_of(actuator))
+                    total = _add(total, sign * ANCHOR_WRENCH(full[U_], full[V_], r[:, 0], dr[:, 0],
+                                                             self.tension_of(actuator)))
         h = (after if after is not None else before)[H_]
         for load in self.robot.point_loads:
             if load.module == m and abs(load.s - s) <= tol:
-                total += self._point_load_wrench(load, h)
+                total = _add(total, self._point_load_wrench(load, h))
         return total
 
     def _point_load_wrench(self, load, h):
-        zero = ca.SX.zeros(3)
+        zero = ca.DM.zeros(3)
         if load.kind == "mass":
             return POINT_WRENCH(h, self.param(f"{load.name}.mass") * self.param("gravity"), zero, zero, zero)
         force, moment = self.param(f"{load.name}.force"), self.param(f"{load.name}.moment")
@@ -201,23 +234,34 @@ class CollocationNLP:
 
     def _base_wrench(self, m, start):
         """Internal wrench just before the module's base, ``W(0-) = W(0+) + point wrenches``."""
-        return self._wrench(m, start) + self._point_wrenches(m, 0.0, None, start)
+        return _add(self._wrench(m, start), self._point_wrenches(m, 0.0, None, start))
 
     # ------------------------------------------------------------------ links
-    def _link_intervals(self, m, s, end, start):
+    def _link_intervals(self, m, ends, starts):
+        """Continuity of p and h and the wrench jump ``K (xi+ - xi-) + point wrenches = 0`` at
+        every interior breakpoint of module m (ends: (13, n_int), starts: (13, n_int - 1))."""
+        mesh = self.meshes[m]
+        if starts.shape[1] == 0:
+            return
+        before = ends[:, :-1]
         length = self.robot.modules[m].length
-        self._g.append((start[P_] - end[P_]) / length)
-        self._g.append(start[H_] - end[H_])
-        jump = self._wrench(m, start) - self._wrench(m, end) + self._point_wrenches(m, s, end, start)
-        self._g.append(jump * self._wrench_scale(m))
+        self._g.append(ca.vec((starts[P_, :] - before[P_, :]) / length))
+        self._g.append(ca.vec(starts[H_, :] - before[H_, :]))
+        jump = ca.DM(self.robot.modules[m].stiffness) @ ca.DM.ones(1, starts.shape[1]) * (starts[7:13, :] - before[7:13, :])
+        columns = []
+        for b, (_, s) in enumerate(mesh.intervals[:-1]):
+            wrench = self._point_wrenches(m, s, before[:, b], starts[:, b])
+            columns.append(wrench if wrench is not None else ca.DM.zeros(6))
+        jump = jump + ca.horzcat(*columns)
+        self._g.append(ca.vec(ca.diag(self._wrench_scale(m)) @ jump))
 
     def _module_end(self, m, end):
         module = self.robot.modules[m]
-        applied = self._point_wrenches(m, module.length, end, None)
+        applied = _add(ca.DM.zeros(6), self._point_wrenches(m, module.length, end, None))
         if m + 1 == len(self.robot.modules):
             self._g.append((self._wrench(m, end) - applied) * self._wrench_scale(m))
             return
-        start = self._states[m + 1][0][:, 0]
+        start = self._states[m + 1][:, 0]
         connector = self.robot.modules[m + 1].connector
         offset = np.zeros(3) if connector is None else connector.offset
         q_c = np.array([1.0, 0, 0, 0]) if connector is None else connector.quaternion
@@ -249,6 +293,35 @@ class CollocationNLP:
         return self.meshes[m].node_s(self.scheme)
 
 
-def _flat(index):
-    """Indices of one interval's (13, d+1) block in column-major (node-major) order."""
-    return index.T.ravel().tolist()
+def _add(a, b):
+    """Sum where ``None`` means nothing."""
+    if a is None:
+        return b
+    return a if b is None else a + b
+
+
+def _derivative_matrix(scheme, steps):
+    """(n_int (d+1), n_int d): node values -> d/ds at the collocation points, per interval."""
+    d, n_int = scheme.degree, len(steps)
+    matrix = np.zeros((n_int * (d + 1), n_int * d))
+    for i, step in enumerate(steps):
+        matrix[i * (d + 1):(i + 1) * (d + 1), i * d:(i + 1) * d] = scheme.C[:, 1:] / step
+    return ca.sparsify(ca.DM(matrix))
+
+
+def _quadrature_matrix(scheme, steps):
+    """(n_int d, n_int): collocation-point values -> integral over each interval."""
+    d, n_int = scheme.degree, len(steps)
+    matrix = np.zeros((n_int * d, n_int))
+    for i, step in enumerate(steps):
+        matrix[i * d:(i + 1) * d, i] = step * scheme.weights
+    return matrix
+
+
+def _end_matrix(scheme, n_int):
+    """(n_int (d+1), n_int): node values -> value at each interval's end."""
+    d = scheme.degree
+    matrix = np.zeros((n_int * (d + 1), n_int))
+    for i in range(n_int):
+        matrix[i * (d + 1):(i + 1) * (d + 1), i] = scheme.D
+    return ca.sparsify(ca.DM(matrix))

@@ -1,7 +1,9 @@
 """The rod equations of one module as CasADi Functions (SPEC sections 2 and 3), shared by the
 collocation and shooting solvers.
 
-State ``x = [p (3), h (4), u (3), v (3)]`` (global position, non-unit quaternion, body strains).
+State ``x = [p (3), h (4), u - u* (3), v - v* (3)]``: global position, non-unit quaternion and the
+body strains as deviations from the reference strains ``xi* = [u*, v*]`` (the internal wrench is
+``K (xi - xi*)``: computing it from the deviation keeps stiff axial/shear terms free of roundoff).
 Actuator route data per actuator: ``[r, r', r'']`` (9 values, body frame, per metre of s).
 """
 import casadi as ca
@@ -24,7 +26,7 @@ def path_tangent(u, v, du, dv, r, dr, ddr):
 def rod_equations(stiffness, xi_star, n_actuators):
     """Function ``(x, dxi, routes, F, f_glob, l_glob, f_body, l_body) -> (kin, eq, speed)``.
 
-    ``kin`` (7): ``[p', h']``; ``eq`` (6): the residual of equilibrium in the body frame,
+    ``x`` is the deviation state (module docstring). ``kin`` (7): ``[p', h']``; ``eq`` (6): the residual of equilibrium in the body frame,
     ``[m' + u x m + v x n + l ; n' + u x n + f]`` [N, N/m], which is linear in ``dxi``;
     ``speed`` (n_actuators): ``|a|`` of each route. ``F`` are the tensions [N] (zero for actuators
     not present at this s); ``f_glob``/``l_glob`` are distributed loads per unit length in the global
@@ -36,12 +38,13 @@ def rod_equations(stiffness, xi_star, n_actuators):
     routes = ca.SX.sym("routes", 9, n_actuators)
     tension = ca.SX.sym("F", n_actuators)
     loads = [ca.SX.sym(name, 3) for name in ("f_glob", "l_glob", "f_body", "l_body")]
-    h, u, v = x[3:7], x[7:10], x[10:13]
+    h = x[3:7]
+    u, v = x[7:10] + ca.DM(xi_star[0:3]), x[10:13] + ca.DM(xi_star[3:6])
     du, dv = dxi[0:3], dxi[3:6]
     R = rotation_matrix(h)
     k = ca.DM(stiffness)
-    m = k[0:3] * (u - ca.DM(xi_star[0:3]))
-    n = k[3:6] * (v - ca.DM(xi_star[3:6]))
+    m = k[0:3] * x[7:10]
+    n = k[3:6] * x[10:13]
     f = R.T @ loads[0] + loads[2]
     l = R.T @ loads[1] + loads[3]
     speeds = []

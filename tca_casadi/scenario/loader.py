@@ -114,7 +114,8 @@ def _collect_lines(node, path, lines, origin):
 
 # ----------------------------------------------------------------------------- errors
 def _first_error(exc, raw, sources):
-    errors = exc.errors()
+    # an unknown (misspelt) key explains a missing one next to it: report it first
+    errors = sorted(exc.errors(), key=lambda e: e["type"] != "extra_forbidden")
     error = errors[0]
     path = _data_path(error["loc"], raw)
     message = _message(error, path)

@@ -69,7 +69,12 @@ def _named(items, name):
 def _walk(raw, path, rest, dotted):
     node = raw
     for key in path:
-        node = node[key] if isinstance(node, (dict, list)) else None
+        if isinstance(node, dict):
+            node = node.get(key)
+        elif isinstance(node, list) and isinstance(key, int) and key < len(node):
+            node = node[key]
+        else:
+            node = None
     for part in rest:
         if isinstance(node, list):
             index = _named(node, part)

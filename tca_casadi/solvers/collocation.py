@@ -21,12 +21,19 @@ class CollocationSolver:
         start = time.perf_counter()
         self.robot, self.options = robot, options
         self.nlp = CollocationNLP(robot, options.intervals, options.degree, options.scheme)
-        ipopt = {"print_level": 0, "sb": "yes", "tol": options.tolerance,
+        # square feasibility problem (f = 0): success is governed by constr_viol_tol on our own
+        # order-one scaled constraints; equalities are not relaxed (bound_relax_factor = 0);
+        # pivtol = 0 lets MUMPS skip threshold pivoting (IPOPT raises it when a solve is inaccurate);
+        # the Lagrangian Hessian is zero at the multipliers of a square problem: no need to build it
+        ipopt = {"print_level": 0, "sb": "yes", "tol": max(options.tolerance, 1e-8),
                  "constr_viol_tol": options.tolerance, "max_iter": options.max_iterations,
-                 "warm_start_init_point": "yes", "hessian_approximation": "limited-memory"}
+                 "warm_start_init_point": "yes", "hessian_approximation": "limited-memory",
+                 "mumps_pivtol": 0.0, "nlp_scaling_method": "none",
+                 "bound_relax_factor": 0.0}
         self._ipopt = ca.nlpsol("collocation", "ipopt", self.nlp.problem,
-                                {"ipopt": ipopt, "print_time": False, "error_on_fail": False})
-        self._constraints = ca.Function("g", [self.nlp.w, self.nlp.P], [self.nlp.problem["g"]])
+                                {"ipopt": ipopt, "print_time": False, "error_on_fail": False,
+                                                       "expand": True})
+        self._constraints = ca.Function("g", [self.nlp.w, self.nlp.P], [self.nlp.problem["g"]]).expand()
         self.build_time_s = time.perf_counter() - start
         self.solve_count = 0
         log.info("built collocation NLP: %d variables in %.3f s", self.nlp.w.numel(), self.build_time_s)

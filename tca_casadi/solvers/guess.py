@@ -48,4 +48,7 @@ def reference_guess(nlp, params):
         deviation = states[:, :-1] - nlp.state_offset[m][:, None]
         w[nlp.state_index[m].transpose(1, 0, 2).reshape(13, -1)] = deviation
         p0, h0 = states[0:3, -1], states[3:7, -1]
-    return w / nlp.scale
+    w = w / nlp.scale
+    partial_index = np.concatenate(nlp.partial_index) if nlp.partial_index else np.zeros(0, int)
+    w[partial_index] = np.array(nlp.partials(w, params)).ravel()
+    return w
