@@ -1,6 +1,7 @@
-"""Command line: ``tca-casadi validate|solve SCENARIO ...``.
+"""Command line: ``tca-casadi validate|solve|check SCENARIO ...``.
 
-Exit codes: 0 success, 1 the solver did not converge, 2 bad input (one line on stderr).
+Exit codes: 0 success, 1 the solver did not converge (``check``: the solvers disagree),
+2 bad input (one line on stderr).
 """
 import argparse
 import json
@@ -35,7 +36,18 @@ def build_parser():
                        help="output directory (default: results/<scenario name>)")
     solve.add_argument("--json", action="store_true", help="print solution.json to stdout")
     solve.add_argument("--no-plot", action="store_true", help="do not draw robot.png")
-    solve.add_argument("--method", choices=["collocation"], default=None, help="solver (default: scenario's)")
+    solve.add_argument("--method", choices=["collocation", "shooting"], default=None,
+                       help="solver (default: the scenario's, collocation)")
+
+    check = commands.add_parser("check", help="solve by collocation and by shooting; report the difference")
+    _scenario_arguments(check)
+    check.add_argument("-o", "--output", type=Path, default=None,
+                       help="output directory for check.json (default: results/<scenario name>)")
+    check.add_argument("--position-tolerance", type=float, default=1e-6, metavar="M",
+                       help="allowed tip and centerline difference [m] (default 1e-6)")
+    check.add_argument("--tension-tolerance", type=float, default=1e-5, metavar="REL",
+                       help="allowed relative tension difference (default 1e-5)")
+    check.add_argument("--json", action="store_true", help="print check.json to stdout")
     return parser
 
 
@@ -87,7 +99,21 @@ def _solve(args):
     return 0 if solution.converged else 1
 
 
-COMMANDS = {"validate": _validate, "solve": _solve}
+def _check(args):
+    from .simulation import Simulation
+    from .studies import check
+    sim = Simulation.from_file(args.scenario, args.overrides)
+    report, _, _ = check(sim, args.position_tolerance, args.tension_tolerance)
+    path = report.save((args.output or Path("results") / sim.scenario.name) / "check.json")
+    if args.json:
+        print(json.dumps(report.to_dict(), indent=2))
+    else:
+        print(report.summary())
+        print(f"wrote {path}")
+    return 0 if report.agree else 1
+
+
+COMMANDS = {"validate": _validate, "solve": _solve, "check": _check}
 
 if __name__ == "__main__":
     sys.exit(main())

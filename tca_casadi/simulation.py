@@ -6,6 +6,7 @@
     second = sim.solve(warm_start=first)
 """
 import logging
+import time
 
 
 from .errors import ScenarioError
@@ -13,11 +14,11 @@ from .model import Robot
 from .scenario import load_scenario
 from .scenario.loader import validate
 from .scenario.overrides import apply_overrides
-from .solvers import CollocationSolver
+from .solvers import CollocationSolver, ShootingSolver
 
 log = logging.getLogger(__name__)
 
-SOLVERS = {"collocation": CollocationSolver}
+SOLVERS = {"collocation": CollocationSolver, "shooting": ShootingSolver}
 
 
 class Simulation:
@@ -97,6 +98,7 @@ class Simulation:
     def continue_from_rest(self, solver, first_step=0.25, min_step=1e-3):
         """Follow ``P(lam) = P_rest + lam (P - P_rest)`` from the reference state (lam = 0, exact)
         to lam = 1, warm-starting each step; halve the step on failure."""
+        started = time.perf_counter()
         target, rest = self.params.copy(), self.robot.rest_parameters(self.params)
         solution = solver.solve(rest)
         lam, step, steps = 0.0, first_step, 0
@@ -111,8 +113,10 @@ class Simulation:
             else:
                 trial.message = (f"continuation from the reference state stalled at "
                                  f"lambda = {lam:.4f} (step below {min_step}): {trial.message}")
+                trial.solve_time_s = time.perf_counter() - started
                 return trial
         solution.message += f" (continuation from the reference state, {steps} steps)"
+        solution.solve_time_s = time.perf_counter() - started    # all steps included
         return solution
 
 

@@ -1,7 +1,6 @@
 """Analytic and independent reference solutions used by the tests (one shared module)."""
 import math
 
-import numpy as np
 from scipy.integrate import quad
 from scipy.optimize import brentq
 

@@ -19,11 +19,12 @@ The forward problem is square: ``len(w) == len(g)``.
 import casadi as ca
 import numpy as np
 
-from ..model.rod import ANCHOR_WRENCH, POINT_WRENCH, STATE_SIZE, rod_equations
-from ..model.rotations import quaternion_product, rotation_matrix
+from ..model import boundary
+from ..model.boundary import add as _add
+from ..model.rod import STATE_SIZE, rod_equations
 from .mesh import CollocationScheme, build_mesh
 
-P_, H_, U_, V_ = slice(0, 3), slice(3, 7), slice(7, 10), slice(10, 13)
+P_, H_ = slice(0, 3), slice(3, 7)
 
 
 class CollocationNLP:
@@ -98,10 +99,6 @@ class CollocationNLP:
             matrix = ca.reshape(block, STATE_SIZE, -1)
             self._states.append(ca.diag(ca.DM(self.node_scale[m])) @ matrix)
         self._tensions = blocks[-1] * ca.DM(scales[-1]) if len(tcas) else ca.MX(0, 1)
-
-    def full_state(self, m, deviation):
-        """``[p, h, u, v]`` from the deviation state ``[p, h, u - u*, v - v*]``."""
-        return deviation + ca.DM(self.state_offset[m])
 
     def tension_of(self, actuator):
         """Symbolic tension [N] of an actuator: a variable for a TCA, a parameter for a tendon."""
@@ -194,38 +191,11 @@ class CollocationNLP:
 
     # ------------------------------------------------------------------ point wrenches
     def _point_wrenches(self, m, s, before, after):
-        """Sum of point wrenches [N m; N] (body frame) applied at arc length s of module m:
-        anchors starting at s (evaluated with the state after s), anchors ending at s (state
-        before s), point loads and point masses."""
-        module = self.robot.modules[m]
-        total = None
-        tol = 1e-12 * module.length
-        for actuator in module.actuators:
-            s_a, s_b = actuator.route.span
-            for s_anchor, state, sign in ((s_a, after, 1.0), (s_b, before, -1.0)):
-                if state is not None and abs(s_anchor - s) <= tol:
-                    r, dr, _ = actuator.route.evaluate(s_anchor)
-                    full = self.full_state(m, state)
-                    total = _add(total, sign * ANCHOR_WRENCH(full[U_], full[V_], r[:, 0], dr[:, 0],
-                                                             self.tension_of(actuator)))
-        h = (after if after is not None else before)[H_]
-        for load in self.robot.point_loads:
-            if load.module == m and abs(load.s - s) <= tol:
-                total = _add(total, self._point_load_wrench(load, h))
-        return total
-
-    def _point_load_wrench(self, load, h):
-        zero = ca.DM.zeros(3)
-        if load.kind == "mass":
-            return POINT_WRENCH(h, self.param(f"{load.name}.mass") * self.param("gravity"), zero, zero, zero)
-        force, moment = self.param(f"{load.name}.force"), self.param(f"{load.name}.moment")
-        if load.frame == "global":
-            return POINT_WRENCH(h, force, moment, zero, zero)
-        return POINT_WRENCH(h, zero, zero, force, moment)
+        return boundary.point_wrenches(self.robot, m, s, before, after, self.tension_of, self.param)
 
     def _wrench(self, m, x):
         """Internal wrench ``K (xi - xi*)`` [N m; N] of a deviation state."""
-        return ca.DM(self.robot.modules[m].stiffness) * x[7:13]
+        return boundary.internal_wrench(self.robot.modules[m], x)
 
     def _wrench_scale(self, m):
         module = self.robot.modules[m]
@@ -261,21 +231,14 @@ class CollocationNLP:
         if m + 1 == len(self.robot.modules):
             self._g.append((self._wrench(m, end) - applied) * self._wrench_scale(m))
             return
+        nxt = self.robot.modules[m + 1]
         start = self._states[m + 1][:, 0]
-        connector = self.robot.modules[m + 1].connector
-        offset = np.zeros(3) if connector is None else connector.offset
-        q_c = np.array([1.0, 0, 0, 0]) if connector is None else connector.quaternion
-        R_end = rotation_matrix(end[H_])
-        self._g.append((start[P_] - end[P_] - R_end @ ca.DM(offset)) / module.length)
-        self._g.append(start[H_] - quaternion_product(end[H_], ca.DM(q_c)))
-        transmitted = self._base_wrench(m + 1, start)
-        R_c = ca.DM(np.array(rotation_matrix(ca.DM(q_c))))
-        force = R_c @ transmitted[3:6]
-        moment = R_c @ transmitted[0:3] + ca.cross(ca.DM(offset), force)
-        balance = self._wrench(m, end) - applied - ca.vertcat(moment, force)
-        if connector is not None and connector.mass > 0:
-            weight = R_end.T @ (connector.mass * self.param("gravity"))
-            balance -= ca.vertcat(ca.cross(ca.DM(connector.center_of_mass), weight), weight)
+        position, quaternion = boundary.junction_pose(end, nxt)
+        self._g.append((start[P_] - position) / module.length)
+        self._g.append(start[H_] - quaternion)
+        transmitted = boundary.transmit(self._base_wrench(m + 1, start), nxt)
+        weight = boundary.connector_weight(end, nxt, self.param)
+        balance = self._wrench(m, end) - applied - _add(transmitted, weight)
         self._g.append(balance * self._wrench_scale(m))
 
     # ------------------------------------------------------------------ TCA law
@@ -291,13 +254,6 @@ class CollocationNLP:
     def node_s(self, m):
         """Arc length of every node of module m, shape (n_intervals, d+1)."""
         return self.meshes[m].node_s(self.scheme)
-
-
-def _add(a, b):
-    """Sum where ``None`` means nothing."""
-    if a is None:
-        return b
-    return a if b is None else a + b
 
 
 def _derivative_matrix(scheme, steps):

@@ -304,7 +304,7 @@ Load = Annotated[Union[PointLoad, MassLoad, DistributedLoad], Field(discriminato
 # ----------------------------------------------------------------------------- solver
 class SolverOptions(Strict):
     """How to discretise and solve (SPEC section 6)."""
-    method: Literal["collocation"] = "collocation"
+    method: Literal["collocation", "shooting"] = "collocation"
     intervals: int = Field(default=12, ge=1, le=2000)
     degree: int = Field(default=4, ge=1, le=9)
     scheme: Literal["legendre", "radau"] = "legendre"

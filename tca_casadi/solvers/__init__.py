@@ -1,4 +1,5 @@
 """Solvers behind one interface: ``solver.solve(params, initial=None) -> Solution``."""
 from .collocation import CollocationSolver
+from .shooting import ShootingSolver
 
-__all__ = ["CollocationSolver"]
+__all__ = ["CollocationSolver", "ShootingSolver"]

@@ -33,21 +33,31 @@ def reference_states(module, s, p0, h0):
     return out
 
 
-def reference_guess(nlp, params):
-    """Scaled NLP variables of the reference shape from the base pose in ``params``; F = 0."""
-    robot, layout = nlp.robot, nlp.robot.layout
-    w = np.zeros(nlp.scale.size)
+def reference_chain(robot, params, samples):
+    """Every module's reference shape from the base pose in ``params``, through the connectors:
+    ``[states (13, n_m), ...]`` at the arc lengths ``samples[m]``."""
+    layout = robot.layout
     p0 = np.asarray(params[layout["base.position"]], float)
     h0 = np.asarray(params[layout["base.quaternion"]], float)
+    out = []
     for m, module in enumerate(robot.modules):
         if m > 0 and module.connector is not None:
             p0 = p0 + rotation_numpy(h0) @ module.connector.offset
             h0 = _qmul(h0, module.connector.quaternion)
-        s = nlp.node_s(m)
-        states = reference_states(module, np.append(s.ravel(), module.length), p0, h0)
-        deviation = states[:, :-1] - nlp.state_offset[m][:, None]
-        w[nlp.state_index[m].transpose(1, 0, 2).reshape(13, -1)] = deviation
+        states = reference_states(module, np.append(samples[m], module.length), p0, h0)
+        out.append(states[:, :-1])
         p0, h0 = states[0:3, -1], states[3:7, -1]
+    return out
+
+
+def reference_guess(nlp, params):
+    """Scaled NLP variables of the reference shape from the base pose in ``params``; F = 0."""
+    robot = nlp.robot
+    w = np.zeros(nlp.scale.size)
+    samples = [nlp.node_s(m).ravel() for m in range(len(robot.modules))]
+    for m, states in enumerate(reference_chain(robot, params, samples)):
+        deviation = states - nlp.state_offset[m][:, None]
+        w[nlp.state_index[m].transpose(1, 0, 2).reshape(13, -1)] = deviation
     w = w / nlp.scale
     partial_index = np.concatenate(nlp.partial_index) if nlp.partial_index else np.zeros(0, int)
     w[partial_index] = np.array(nlp.partials(w, params)).ravel()

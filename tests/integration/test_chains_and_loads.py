@@ -5,40 +5,10 @@ import copy
 import numpy as np
 import pytest
 from analytic import beam_scenario
+from builders import mixed_chain, robot, rod, solve, tca
 
 from tca_casadi import Simulation
 from tca_casadi.model.rotations import rotation_numpy
-
-HANG = {"position": [0, 0, 0], "orientation": {"axis": [1, 0, 0], "angle": "180 deg"}}
-TCA_TYPE = {"nylon": {"fiber_radius": "0.5 mm", "coil_radius": "0.6 mm", "pitch_angle": "30 deg"}}
-
-
-def rod(name, length, actuators=(), **extra):
-    return dict({"name": name, "length": length, "material": "ecoflex",
-                 "cross_section": {"shape": "circle", "diameter": "4.5 mm",
-                                   "envelope": {"shape": "circle", "diameter": "10 mm"}},
-                 "actuators": list(actuators)}, **extra)
-
-
-def robot(modules, loads=(), gravity=(0, 0, -9.81)):
-    return {"name": "chain", "gravity": list(gravity), "base": HANG,
-            "materials": {"ecoflex": {"youngs_modulus": "0.125 MPa", "density": "1070 kg/m^3"}},
-            "tca_types": TCA_TYPE, "modules": list(modules), "loads": list(loads),
-            "solver": {"intervals": 12, "degree": 4}}
-
-
-def tca(name, angle, temperature, span=None):
-    route = {"kind": "straight", "radius": "4 mm", "angle": angle}
-    if span is not None:
-        route["span"] = span
-    return {"name": name, "kind": "tca", "type": "nylon", "route": route, "temperature": temperature}
-
-
-def solve(scenario):
-    solution = Simulation.from_file(scenario).solve()
-    assert solution.converged, solution.message
-    return solution
-
 
 def test_two_modules_equal_one_module_with_a_span_and_a_mid_module_mass():
     single = robot([rod("body", "45 mm", [tca("a", "0 deg", 90, span=[0, 0.0225]),
@@ -133,19 +103,6 @@ def test_precurved_module_at_rest_is_its_reference_arc():
     center = np.array([radius, 0, 0])   # u_y > 0 curls towards +x
     assert np.allclose(np.linalg.norm(p - center[:, None], axis=0), radius, rtol=1e-9)
     assert np.allclose(solution.modules[0].force, 0.0, atol=1e-15)
-
-
-def mixed_chain(intervals):
-    chain = robot([rod("bend", "30 mm", [tca("a", "0 deg", 80), tca("b", "180 deg", 25)]),
-                   rod("twist", "16 mm", [{"name": "h", "kind": "tca", "type": "nylon", "temperature": 90,
-                                           "route": {"kind": "helix", "radius": "3.5 mm", "turns": 3,
-                                                     "span": ["2 mm", "14 mm"]}}]),
-                   rod("tail", "20 mm", [{"name": "c", "kind": "tendon", "tension": "5 mN",
-                                          "route": {"kind": "curve", "points": [[0, 0.001, 0], [0.01, 0.002, 0.001],
-                                                                                [0.02, 0.0, 0.002]]}}])],
-                  loads=[{"name": "payload", "kind": "mass", "module": "tail", "mass": "1 g"}])
-    chain["solver"]["intervals"] = intervals
-    return Simulation.from_file(chain)
 
 
 def test_helical_tca_and_curve_tendon_in_a_chain_conserve_force():

@@ -1,0 +1,118 @@
+"""Point wrenches and junction links, written once for both solvers (SPEC sections 3 and 5).
+
+Every function takes CasADi symbols or numbers. States are deviation states
+``[p, h, u - u*, v - v*]`` (see :mod:`.rod`); a wrench is ``[moment; force]`` in the body frame.
+``tension(actuator)`` and ``param(name)`` give an actuator's tension [N] and a parameter's value.
+"""
+import casadi as ca
+import numpy as np
+
+from .rod import ANCHOR_WRENCH, POINT_WRENCH
+from .rotations import quaternion_product, rotation_matrix
+
+P_, H_ = slice(0, 3), slice(3, 7)
+
+
+def internal_wrench(module, state):
+    """``K (xi - xi*)`` [N m; N] of a deviation state."""
+    return ca.DM(module.stiffness) * state[7:13]
+
+
+def anchor_wrench(module, actuator, s, state, tension):
+    """Wrench of an actuator's anchor at s: ``+[r x F t; F t]`` at its start (state just after s),
+    ``-[...]`` at its end (state just before s)."""
+    sign = 1.0 if abs(s - actuator.route.span[0]) <= 1e-12 * module.length else -1.0
+    r, dr, _ = actuator.route.evaluate(s)
+    u = state[7:10] + ca.DM(module.xi_star[0:3])
+    v = state[10:13] + ca.DM(module.xi_star[3:6])
+    return sign * ANCHOR_WRENCH(u, v, r[:, 0], dr[:, 0], tension)
+
+
+def point_load_wrench(load, h, param):
+    """Wrench of a point force/moment or a point mass's weight at the centerline."""
+    zero = ca.DM.zeros(3)
+    if load.kind == "mass":
+        return POINT_WRENCH(h, param(f"{load.name}.mass") * param("gravity"), zero, zero, zero)
+    force, moment = param(f"{load.name}.force"), param(f"{load.name}.moment")
+    if load.frame == "global":
+        return POINT_WRENCH(h, force, moment, zero, zero)
+    return POINT_WRENCH(h, zero, zero, force, moment)
+
+
+def starting_anchors(robot, m, s):
+    """Actuators of module m whose span starts at s."""
+    module = robot.modules[m]
+    return [a for a in module.actuators if abs(a.route.span[0] - s) <= 1e-12 * module.length]
+
+
+def ending_anchors(robot, m, s):
+    """Actuators of module m whose span ends at s."""
+    module = robot.modules[m]
+    return [a for a in module.actuators if abs(a.route.span[1] - s) <= 1e-12 * module.length]
+
+
+def loads_at(robot, m, s):
+    module = robot.modules[m]
+    return [load for load in robot.point_loads if load.module == m and abs(load.s - s) <= 1e-12 * module.length]
+
+
+def point_wrenches(robot, m, s, before, after, tension, param):
+    """Sum of the point wrenches applied at arc length s of module m, or ``None`` if none is:
+    anchors starting at s (with the state after s), anchors ending at s (the state before s),
+    point loads and masses. ``before``/``after`` may be None at the module's ends."""
+    module, total = robot.modules[m], None
+    if after is not None:
+        for actuator in starting_anchors(robot, m, s):
+            total = add(total, anchor_wrench(module, actuator, s, after, tension(actuator)))
+    if before is not None:
+        for actuator in ending_anchors(robot, m, s):
+            total = add(total, anchor_wrench(module, actuator, s, before, tension(actuator)))
+    h = (after if after is not None else before)[H_]
+    for load in loads_at(robot, m, s):
+        total = add(total, point_load_wrench(load, h, param))
+    return total
+
+
+def connector_of(module):
+    """``(offset (3,), quaternion (4,), rotation (3, 3))`` of the link into ``module``."""
+    connector = module.connector
+    offset = np.zeros(3) if connector is None else connector.offset
+    quaternion = np.array([1.0, 0, 0, 0]) if connector is None else connector.quaternion
+    return offset, quaternion, np.array(rotation_matrix(ca.DM(quaternion)))
+
+
+def junction_pose(end, next_module):
+    """Base position and quaternion of ``next_module`` from the previous module's end state."""
+    offset, quaternion, _ = connector_of(next_module)
+    return end[P_] + rotation_matrix(end[H_]) @ ca.DM(offset), quaternion_product(end[H_], ca.DM(quaternion))
+
+
+def transmit(base_wrench, next_module):
+    """A wrench at the next module's base (its frame) expressed at the previous tip (its frame)."""
+    offset, _, rotation = connector_of(next_module)
+    force = ca.DM(rotation) @ base_wrench[3:6]
+    return ca.vertcat(ca.DM(rotation) @ base_wrench[0:3] + ca.cross(ca.DM(offset), force), force)
+
+
+def untransmit(tip_wrench, next_module):
+    """Inverse of :func:`transmit`."""
+    offset, _, rotation = connector_of(next_module)
+    force = ca.DM(rotation).T @ tip_wrench[3:6]
+    moment = ca.DM(rotation).T @ (tip_wrench[0:3] - ca.cross(ca.DM(offset), tip_wrench[3:6]))
+    return ca.vertcat(moment, force)
+
+
+def connector_weight(end, next_module, param):
+    """Wrench of the connector's weight at the previous tip (its frame), or None."""
+    connector = next_module.connector
+    if connector is None or connector.mass <= 0:
+        return None
+    weight = rotation_matrix(end[H_]).T @ (connector.mass * param("gravity"))
+    return ca.vertcat(ca.cross(ca.DM(connector.center_of_mass), weight), weight)
+
+
+def add(a, b):
+    """Sum where ``None`` means nothing."""
+    if a is None:
+        return b
+    return a if b is None else a + b

@@ -1,0 +1,113 @@
+"""Cross-check: the same scenario solved by collocation and by shooting, and the difference.
+
+Positions are compared at identical arc lengths (the shooting solver also samples at the
+collocation nodes), so no interpolation error enters the comparison.
+"""
+import json
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..model.rotations import rotation_angle
+
+#: default agreement tolerances: tip and centerline [m], tensions (relative, floor 1e-9 N)
+POSITION_TOLERANCE = 1e-6
+TENSION_TOLERANCE = 1e-5
+TENSION_FLOOR = 1e-9
+
+
+@dataclass
+class CheckReport:
+    """Differences between two solutions of one scenario (SI units)."""
+    scenario: str
+    methods: tuple
+    converged: dict
+    tip_position_difference: float
+    tip_rotation_difference: float
+    max_centerline_distance: float
+    tension_differences: dict = field(default_factory=dict)
+    solve_times_s: dict = field(default_factory=dict)
+    position_tolerance: float = POSITION_TOLERANCE
+    tension_tolerance: float = TENSION_TOLERANCE
+
+    @property
+    def worst_relative_tension(self):
+        return max((d["relative"] for d in self.tension_differences.values()), default=0.0)
+
+    @property
+    def agree(self):
+        """Both converged, positions within the position tolerance, tensions within theirs."""
+        return (all(self.converged.values())
+                and self.tip_position_difference <= self.position_tolerance
+                and self.max_centerline_distance <= self.position_tolerance
+                and self.worst_relative_tension <= self.tension_tolerance)
+
+    def to_dict(self):
+        data = asdict(self)
+        data["agree"] = self.agree
+        return data
+
+    def save(self, path):
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        Path(path).write_text(json.dumps(self.to_dict(), indent=2))
+        return Path(path)
+
+    def summary(self):
+        a, b = self.methods
+        verdict = "AGREE" if self.agree else "DISAGREE"
+        lines = [f"{self.scenario}: {a} vs {b}: {verdict} (tolerances: position "
+                 f"{self.position_tolerance:.0e} m, tension {self.tension_tolerance:.0e} relative)",
+                 f"  converged: {a} {self.converged[a]}, {b} {self.converged[b]}",
+                 f"  tip position difference   {self.tip_position_difference:.3e} m",
+                 f"  tip rotation difference   {self.tip_rotation_difference:.3e} rad",
+                 f"  max centerline distance   {self.max_centerline_distance:.3e} m"]
+        for key, d in self.tension_differences.items():
+            lines.append(f"  {key:<24} {d[a] * 1e3:+.6f} mN vs {d[b] * 1e3:+.6f} mN  "
+                         f"(relative {d['relative']:.2e})")
+        lines.append("  solve time: " + ", ".join(f"{k} {v:.3f} s" for k, v in self.solve_times_s.items()))
+        return "\n".join(lines)
+
+
+def compare_solutions(first, second, position_tolerance=POSITION_TOLERANCE,
+                      tension_tolerance=TENSION_TOLERANCE):
+    """:class:`CheckReport` of two solutions of the same robot."""
+    a, b = first.method, second.method
+    distance = 0.0
+    for ma, mb in zip(first.modules, second.modules):
+        distance = max(distance, _centerline_distance(ma, mb))
+    tensions = {}
+    for key, actuator in first.actuators.items():
+        ta, tb = actuator.tension, second.actuators[key].tension
+        tensions[key] = {a: ta, b: tb, "absolute": abs(ta - tb),
+                         "relative": abs(ta - tb) / max(abs(ta), abs(tb), TENSION_FLOOR)}
+    return CheckReport(
+        scenario=first.scenario_name, methods=(a, b),
+        converged={a: bool(first.converged), b: bool(second.converged)},
+        tip_position_difference=float(np.linalg.norm(first.tip_position - second.tip_position)),
+        tip_rotation_difference=rotation_angle(first.tip_rotation, second.tip_rotation),
+        max_centerline_distance=distance, tension_differences=tensions,
+        solve_times_s={a: first.solve_time_s, b: second.solve_time_s},
+        position_tolerance=position_tolerance, tension_tolerance=tension_tolerance)
+
+
+def _centerline_distance(ma, mb):
+    """Largest distance between the two centerlines at the arc lengths both sampled."""
+    worst, used = 0.0, 0
+    for k, s in enumerate(ma.s):
+        match = np.flatnonzero(np.abs(mb.s - s) <= 1e-12 * max(1.0, abs(s)))
+        if match.size:
+            worst = max(worst, float(np.min(np.linalg.norm(mb.p[:, match] - ma.p[:, k:k + 1], axis=0))))
+            used += 1
+    if used == 0:
+        raise ValueError(f"module {ma.name}: the two solutions share no arc length to compare at")
+    return worst
+
+
+def check(simulation, position_tolerance=POSITION_TOLERANCE, tension_tolerance=TENSION_TOLERANCE):
+    """Solve ``simulation`` by collocation and (independently, from a cold start) by shooting."""
+    collocation = simulation.solve(method="collocation")
+    simulation.solver("shooting").sample_s = [m.s for m in collocation.modules]
+    shooting = simulation.solve(method="shooting")
+    report = compare_solutions(collocation, shooting, position_tolerance, tension_tolerance)
+    return report, collocation, shooting
