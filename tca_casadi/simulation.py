@@ -44,6 +44,10 @@ class Simulation:
         A parameter (temperature, tension, load, gravity, base pose) changes only the parameter
         vector; anything else (a length, a route, the mesh) rebuilds the model and solver.
         """
+        if self.scenario._raw is None:           # built in Python, not loaded: start from its data
+            from .scenario.loader import SourceMap
+            self.scenario._raw = self.scenario.model_dump(mode="json")
+            self.scenario._sources = SourceMap("<scenario>")
         raw = apply_overrides(self.scenario._raw, {path: value}, self.scenario._sources)
         scenario = validate(raw, self.scenario._sources)
         if self.robot.structure_key(scenario) == self.robot.structure_key(self.scenario):

@@ -1,19 +1,23 @@
 """Direct collocation of a robot: one CasADi NLP per scenario structure (SPEC section 6).
 
-Glossary of the NLP (the ordering is block-banded, module by module):
+Glossary of the NLP (written down once; the solvers and the guess rely on it):
 
-Variables ``w`` (all scaled, see :attr:`CollocationNLP.scale`):
-    for each module m, for each interval i, for each node j = 0..d (j = 0 is the interval start):
-        ``x = [p (3), h (4), u (3), v (3)]`` at ``s = s0 + tau_j (s1 - s0)``
-    then the TCA tensions ``F`` (one per TCA, in ``robot.tcas`` order).
+Variables ``w`` (scaled: the physical value is ``scale * w``):
+    1. for each module m, for each interval i, for each node j = 0..d (j = 0 is the interval
+       start, then the collocation points): the deviation state
+       ``[p (3), h (4), (u - u*) (3), (v - v*) (3)]``, scaled by ``[L, 1, F_s L / K_bt, F_s / K_se]``
+       (``F_s = EI / L^2``: the strains become order-one internal moments and forces);
+    2. for each module, the partial length of each of its actuators over each interval [/L];
+    3. the TCA tensions [/F_s], in ``robot.tcas`` order.
 Parameters ``P``: the robot's parameter vector (``robot.layout``): gravity, base pose,
     temperatures, tendon tensions, load forces/moments/masses.
-Constraints ``g`` (all scaled to order one, all equalities ``g = 0``):
-    for each module, for each interval: d collocation blocks ``[p' - R v, h' - Omega h / 2,
-    equilibrium (6)]``, then the link to the next interval (continuity of p, h; wrench jump of
-    point wrenches at the breakpoint), or at the module's end the junction link to the next
-    module (pose through the connector, wrench balance) or, for the last module, the tip wrench;
-    the base pose of the first module comes first; last, one compatibility equation per TCA.
+Constraints ``g`` (equalities, each scaled to order one), per module in order:
+    the base pose (first module only); the rod equations at every collocation point,
+    ``[p' - R v, h' - Omega h / 2, equilibrium (6)]``; the partial lengths (Gauss quadrature of
+    ``|a|`` over each interval); at the interior breakpoints, continuity of p and h and the wrench
+    jump ``K (xi+ - xi-) + point wrenches = 0``; at the module's end, the junction link to the next
+    module (pose through the connector, wrench balance) or, for the last module, the tip wrench.
+    Last, one compatibility equation per TCA (its law, multiplied through by ``G_t(F)``).
 The forward problem is square: ``len(w) == len(g)``.
 """
 import casadi as ca

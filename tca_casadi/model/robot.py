@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
+from scipy.integrate import simpson
 
 from ..scenario.checks import fail, route_span
 from .routes import make_route
@@ -203,7 +204,6 @@ def reference_path_length(route, xi_star, points=4001):
     r, dr, _ = route.evaluate(s)
     a = xi_star[3:6, None] + np.cross(xi_star[0:3], r, axis=0) + dr
     speed = np.linalg.norm(a, axis=0)
-    from scipy.integrate import simpson
     return float(simpson(speed, x=s))
 
 

@@ -39,7 +39,7 @@ def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_point
             everything.append(ring)
     for key, actuator in solution.actuators.items():
         kind = "tendon" if actuator.kind == "tendon" else ("heated" if actuator.heated else "passive")
-        ax.plot(*(actuator.path * 1e3), color=COLORS[kind], linewidth=1.6,
+        ax.plot(*(_smooth(actuator.path) * 1e3), color=COLORS[kind], linewidth=1.6,
                 label=f"{key} ({kind}, {actuator.tension * 1e3:.2f} mN)")
     for position, label, color in extra_points:
         point = np.asarray(position) * 1e3
@@ -52,6 +52,19 @@ def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_point
     if solution.actuators or extra_points:
         ax.legend(loc="upper left", fontsize=7)
     return ax
+
+
+def _smooth(path, per_segment=6):
+    """A cubic spline through the path's nodes (parameterised by chord length) for drawing only."""
+    from scipy.interpolate import CubicSpline
+    steps = np.linalg.norm(np.diff(path, axis=1), axis=0)
+    keep = np.r_[True, steps > 1e-12]
+    path = path[:, keep]
+    if path.shape[1] < 4:
+        return path
+    chord = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(path, axis=1), axis=0))]
+    fine = np.linspace(0.0, chord[-1], per_segment * path.shape[1])
+    return CubicSpline(chord, path, axis=1)(fine)
 
 
 def _equal_axes(ax, points):

@@ -84,3 +84,22 @@ def test_unconverged_solve_is_reported_as_such(scenarios):
     assert solution.warnings[0].startswith("not converged")
     with pytest.raises(Exception, match="did not converge"):
         solution.raise_if_failed()
+
+
+def test_compressed_passive_tca_is_reported(scenarios):
+    """A tip force towards TCA 1 bends the cold module so that TCA 1 is on the concave side."""
+    sim = Simulation.from_file(scenarios / "bending_module.yaml", [
+        "bending.tca2.temperature=25", "bending.tca3.temperature=25",
+        "loads=[{name: push, kind: point, module: bending, force: [0.02, 0, 0]}]"])
+    solution = sim.solve()
+    tca1 = solution.actuators["bending.tca1"]
+    assert solution.converged and tca1.tension < 0 and tca1.stroke < 0
+    assert any("bending.tca1 is in compression" in w for w in solution.warnings)
+    law = sim.robot.tcas[0].law                      # the C1 extension of G_t below zero force
+    assert tca1.stroke == pytest.approx(float(law.stretch(tca1.tension)), abs=1e-12)
+
+
+def test_tension_beyond_the_fit_is_reported(scenarios):
+    solution = Simulation.from_file(scenarios / "twisting_module.yaml", ["twisting.tca.temperature=140"]).solve()
+    assert solution.converged and solution.actuators["twisting.tca"].tension > 0.1504
+    assert any("beyond the fit's monotone range" in w for w in solution.warnings)

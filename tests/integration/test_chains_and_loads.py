@@ -130,3 +130,17 @@ def test_deepcopy_of_scenario_dict_is_not_mutated():
     before = copy.deepcopy(scenario)
     Simulation.from_file(scenario, ["body.length=40 mm"])
     assert scenario == before
+
+
+def test_scenario_built_in_python_can_be_changed(scenarios):
+    import yaml
+
+    from tca_casadi import Scenario
+    data = yaml.safe_load((scenarios / "analytic" / "tendon_arc.yaml").read_text())
+    sim = Simulation(Scenario.model_validate(data))
+    first = sim.solve()
+    sim.set("rod.tendon.tension", "6 mN")
+    second = sim.solve(warm_start=first)
+    assert second.converged and second.tensions["rod.tendon"] == pytest.approx(0.006)
+    # curvature scales with tension (u = F r / EI): 6/5 of the first
+    assert second.modules[0].u[1, 0] == pytest.approx(1.2 * first.modules[0].u[1, 0], rel=1e-9)
