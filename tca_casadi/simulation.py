@@ -105,11 +105,11 @@ class Simulation:
         started = time.perf_counter()
         target, rest = self.params.copy(), self.robot.rest_parameters(self.params)
         solution = solver.solve(rest)
-        lam, step, steps = 0.0, first_step, 0
+        lam, step, steps, iterations = 0.0, first_step, 0, solution.iterations
         while lam < 1.0 and solution.converged:
             trial_lam = min(1.0, lam + step)
             trial = solver.solve(rest + trial_lam * (target - rest), solution)
-            steps += 1
+            steps, iterations = steps + 1, iterations + trial.iterations
             if trial.converged:
                 lam, solution, step = trial_lam, trial, min(0.5, 1.5 * step)
             elif step / 2 >= min_step:
@@ -117,10 +117,11 @@ class Simulation:
             else:
                 trial.message = (f"continuation from the reference state stalled at "
                                  f"lambda = {lam:.4f} (step below {min_step}): {trial.message}")
-                trial.solve_time_s = time.perf_counter() - started
+                trial.solve_time_s, trial.iterations = time.perf_counter() - started, iterations
                 return trial
         solution.message += f" (continuation from the reference state, {steps} steps)"
         solution.solve_time_s = time.perf_counter() - started    # all steps included
+        solution.iterations = iterations
         return solution
 
 
