@@ -12,7 +12,7 @@ COMPRESSION_TOLERANCE = 1e-9
 def module_result(module, s, states, base_wrench_body):
     """:class:`ModuleResult` from node states (13, n) at arc lengths s (n,)."""
     n = states.shape[1]
-    R = np.stack([np.array(ROTATION(states[3:7, k])) for k in range(n)], axis=2)
+    R = np.array(ROTATION.map(n)(states[3:7])).reshape(3, n, 3).transpose(0, 2, 1)   # (3, 3, n)
     wrench = module.stiffness[:, None] * (states[7:13] - module.xi_star[:, None])
     moment = np.einsum("ijk,jk->ik", R, wrench[0:3])
     force = np.einsum("ijk,jk->ik", R, wrench[3:6])
