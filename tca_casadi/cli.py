@@ -1,7 +1,7 @@
-"""Command line: ``tca-casadi validate|solve|check SCENARIO ...``.
+"""Command line: ``tca-casadi validate|solve|check|sweep SCENARIO ...``.
 
 Exit codes: 0 success, 1 the solver did not converge (``check``: the solvers disagree),
-2 bad input (one line on stderr).
+2 bad input (one line on stderr). ``sweep``: 1 when the run stopped before the stop value.
 """
 import argparse
 import json
@@ -48,6 +48,24 @@ def build_parser():
     check.add_argument("--tension-tolerance", type=float, default=1e-5, metavar="REL",
                        help="allowed relative tension difference (default 1e-5)")
     check.add_argument("--json", action="store_true", help="print check.json to stdout")
+
+    sweep = commands.add_parser("sweep", help="continuation over parameters; write sweep.csv and plots")
+    _scenario_arguments(sweep)
+    sweep.add_argument("--param", dest="params", action="append", required=True, metavar="PATH",
+                       help="parameter to move (repeatable; all move together), e.g. "
+                            "bending.tca2.temperature, cable.tension, payload.force.x, gravity.magnitude")
+    sweep.add_argument("--from", dest="start", required=True, metavar="VALUE",
+                       help="start value, in the parameter's unit (degC, N, m/s^2) or with a unit ('5 mN')")
+    sweep.add_argument("--to", dest="stop", required=True, metavar="VALUE", help="stop value")
+    sweep.add_argument("--steps", type=int, default=51, help="number of points, ends included (default 51)")
+    sweep.add_argument("--arclength", action="store_true",
+                       help="pseudo-arclength continuation: follow the branch through folds")
+    sweep.add_argument("--min-step", type=float, default=1e-4, metavar="FRACTION",
+                       help="smallest step, as a fraction of the range, before a run stops (default 1e-4)")
+    sweep.add_argument("-o", "--output", type=Path, default=None,
+                       help="output directory (default: results/<scenario name>/sweep)")
+    sweep.add_argument("--no-plot", action="store_true", help="do not draw sweep.png and sweep_robots.png")
+    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser
 
 
@@ -113,7 +131,42 @@ def _check(args):
     return 0 if report.agree else 1
 
 
-COMMANDS = {"validate": _validate, "solve": _solve, "check": _check}
+def _sweep(args):
+    from .simulation import Simulation
+    from .studies import Sweep
+    sim = Simulation.from_file(args.scenario, args.overrides)
+    sweep = Sweep(sim, args.params, _number(args.start), _number(args.stop), args.steps,
+                  arclength=args.arclength, min_step=args.min_step)
+    result = _with_progress(sweep.run, "sweep", quiet=args.quiet)
+    written = result.save(args.output or Path("results") / sim.scenario.name / "sweep",
+                          plots=not args.no_plot)
+    print(result.summary())
+    print("wrote " + ", ".join(str(p) for p in written))
+    return 0 if result.completed else 1
+
+
+def _number(text):
+    """A plain number where the text is one; else the text (a value with a unit)."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def _with_progress(run, label, quiet=False):
+    """Call ``run(progress=...)`` with a rich progress bar on stderr (none if quiet or not a TTY)."""
+    if quiet or not sys.stderr.isatty():
+        return run(progress=None)
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+    columns = (TextColumn(f"{label} "), BarColumn(), TextColumn("{task.percentage:>5.1f}%"),
+               TextColumn("{task.description}"), TimeElapsedColumn())
+    with Progress(*columns, console=Console(stderr=True), transient=True) as bar:
+        task = bar.add_task("", total=1.0)
+        return run(progress=lambda fraction, text: bar.update(task, completed=fraction, description=text))
+
+
+COMMANDS = {"validate": _validate, "solve": _solve, "check": _check, "sweep": _sweep}
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -15,6 +15,7 @@ from .scenario import load_scenario
 from .scenario.loader import validate
 from .scenario.overrides import apply_overrides
 from .solvers import CollocationSolver, ShootingSolver
+from .solvers.continuation import BranchFollower
 
 log = logging.getLogger(__name__)
 
@@ -101,28 +102,54 @@ class Simulation:
 
     def continue_from_rest(self, solver, first_step=0.25, min_step=1e-3):
         """Follow ``P(lam) = P_rest + lam (P - P_rest)`` from the reference state (lam = 0, exact)
-        to lam = 1, warm-starting each step; halve the step on failure."""
+        to lam = 1: predictor-corrector steps on the collocation NLP (branch jumps rejected),
+        warm-started solves for shooting; failed steps are halved down to ``min_step``."""
         started = time.perf_counter()
         target, rest = self.params.copy(), self.robot.rest_parameters(self.params)
         solution = solver.solve(rest)
-        lam, step, steps, iterations = 0.0, first_step, 0, solution.iterations
-        while lam < 1.0 and solution.converged:
-            trial_lam = min(1.0, lam + step)
-            trial = solver.solve(rest + trial_lam * (target - rest), solution)
-            steps, iterations = steps + 1, iterations + trial.iterations
-            if trial.converged:
-                lam, solution, step = trial_lam, trial, min(0.5, 1.5 * step)
-            elif step / 2 >= min_step:
-                step /= 2
-            else:
-                trial.message = (f"continuation from the reference state stalled at "
-                                 f"lambda = {lam:.4f} (step below {min_step}): {trial.message}")
-                trial.solve_time_s, trial.iterations = time.perf_counter() - started, iterations
-                return trial
-        solution.message += f" (continuation from the reference state, {steps} steps)"
+        if not solution.converged:
+            return solution
+        if hasattr(solver, "square"):
+            solution, lam, steps, iterations = _follow_branch(solver, rest, target, solution,
+                                                              first_step, min_step)
+        else:
+            solution, lam, steps, iterations = _warm_steps(solver, rest, target, solution,
+                                                           first_step, min_step)
+        if lam < 1.0:
+            solution.converged = False
+            solution.message = (f"continuation from the reference state stalled at lambda = "
+                                f"{lam:.4f} (step below {min_step}): {solution.message}")
+        else:
+            solution.message += f" (continuation from the reference state, {steps} steps)"
         solution.solve_time_s = time.perf_counter() - started    # all steps included
         solution.iterations = iterations
         return solution
+
+
+def _follow_branch(solver, rest, target, start, first_step, min_step):
+    """Collocation: predictor-corrector continuation. Returns (solution, lam, steps, iterations)."""
+    follower = BranchFollower(solver, rest, target - rest)
+    point, _, steps, failure = follower.advance(follower.point(0.0, start), 1.0, first_step, 0.5, min_step)
+    iterations = start.iterations + follower.iterations
+    if failure is not None:
+        return failure.trial, point.lam, steps, iterations
+    return point.solution, 1.0, steps, iterations
+
+
+def _warm_steps(solver, rest, target, solution, first_step, min_step):
+    """Shooting: warm-started solves, halving failed steps. Returns (solution, lam, steps, iterations)."""
+    lam, step, steps, iterations = 0.0, first_step, 0, solution.iterations
+    while lam < 1.0:
+        trial_lam = min(1.0, lam + step)
+        trial = solver.solve(rest + trial_lam * (target - rest), solution)
+        steps, iterations = steps + 1, iterations + trial.iterations
+        if trial.converged:
+            lam, solution, step = trial_lam, trial, min(0.5, 1.5 * step)
+        elif step / 2 >= min_step:
+            step /= 2
+        else:
+            return trial, lam, steps, iterations
+    return solution, lam, steps, iterations
 
 
 def _needs_continuation(solution):

@@ -9,6 +9,7 @@ import numpy as np
 from ..discretisation import CollocationNLP
 from .assemble import build_solution
 from .guess import reference_guess
+from .newton import SquareSystem
 
 log = logging.getLogger(__name__)
 
@@ -34,6 +35,7 @@ class CollocationSolver:
                                 {"ipopt": ipopt, "print_time": False, "error_on_fail": False,
                                                        "expand": True})
         self._constraints = ca.Function("g", [self.nlp.w, self.nlp.P], [self.nlp.problem["g"]]).expand()
+        self._square = None
         self.build_time_s = time.perf_counter() - start
         self.solve_count = 0
         log.info("built collocation NLP: %d variables in %.3f s", self.nlp.w.numel(), self.build_time_s)
@@ -55,7 +57,7 @@ class CollocationSolver:
         self.solve_count += 1
         stats = self._ipopt.stats()
         w = np.array(result["x"]).ravel()
-        residual = float(np.max(np.abs(np.array(self._constraints(w, params))))) if w.size else 0.0
+        residual = self.max_residual(w, params)
         converged = bool(stats["success"]) and residual <= 10 * self.options.tolerance
         status = {"converged": converged, "status": stats["return_status"],
                   "message": _message(stats, residual, self.options.tolerance),
@@ -63,6 +65,40 @@ class CollocationSolver:
                   "iterations": int(stats.get("iter_count", 0)), "solve_time_s": elapsed,
                   "build_time_s": self.build_time_s, "raw": {"w": w, "method": self.method}}
         return self._assemble(w, params, status)
+
+    @property
+    def square(self):
+        """The :class:`SquareSystem` (residual, sparse Jacobian, Newton) of this NLP."""
+        if self._square is None:
+            self._square = SquareSystem(self.nlp, self._ipopt)
+        return self._square
+
+    def linearise(self, w, params):
+        """:class:`Linearisation` of the square system at scaled variables ``w`` and ``params``."""
+        return self.square.linearise(w, params)
+
+    def solve_newton(self, params, w0):
+        """Newton's method on the square system from scaled variables ``w0`` (a predictor):
+        the same equations and tolerance as :meth:`solve`, without IPOPT's machinery."""
+        params = np.asarray(params, dtype=float)
+        start = time.perf_counter()
+        result = self.square.newton(w0, params, self.options.tolerance)
+        self.solve_count += 1
+        status = {"converged": result.converged, "status": "Newton",
+                  "message": result.message, "max_residual": result.residual,
+                  "iterations": result.iterations, "solve_time_s": time.perf_counter() - start}
+        return self.evaluate(result.w, params, status)
+
+    def evaluate(self, w, params, status):
+        """A :class:`Solution` from scaled variables ``w`` found by another algorithm (e.g. the
+        pseudo-arclength corrector); ``status`` as in :func:`build_solution`, without ``raw``."""
+        status = dict(status, method=self.method, build_time_s=self.build_time_s,
+                      raw={"w": np.asarray(w, float), "method": self.method})
+        return self._assemble(np.asarray(w, float), np.asarray(params, float), status)
+
+    def max_residual(self, w, params):
+        """Largest scaled constraint violation at ``(w, params)``."""
+        return float(np.max(np.abs(np.array(self._constraints(w, params))))) if np.size(w) else 0.0
 
     def _assemble(self, w, params, status):
         nlp = self.nlp

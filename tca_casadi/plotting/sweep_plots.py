@@ -1,0 +1,65 @@
+"""Plots of a sweep: tip displacement and actuator tensions against the first swept parameter
+(events marked), and the robot drawn at a few points of the branch."""
+import numpy as np
+
+from .robot3d import _equal_axes, _pyplot, _smooth
+
+
+def plot_sweep(result, path):
+    """Two panels against the first parameter: tip displacement from the first point [mm] and
+    TCA/tendon tensions [mN]; dashed lines at events. Saves a PNG at ``path``."""
+    plt = _pyplot()
+    parameter = result.parameters[0]
+    x = result.values[:, 0]
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 7), sharex=True)
+    move = (result.tip_positions - result.tip_positions[0]) * 1e3
+    for axis, name in enumerate("xyz"):
+        top.plot(x, move[:, axis], ".-", label=f"tip {name}")
+    top.plot(x, np.linalg.norm(move, axis=1), "k--", label="|tip displacement|")
+    top.set_ylabel("tip displacement [mm]")
+    for key in result.points[0].solution.actuators:
+        bottom.plot(x, result.tensions(key) * 1e3, ".-", label=key)
+    bottom.axhline(0.0, color="grey", linewidth=0.8)
+    bottom.set_ylabel("tension [mN]")
+    bottom.set_xlabel(parameter.label + ("" if len(result.parameters) == 1 else " (and the others with it)"))
+    for event in result.events:
+        for ax in (top, bottom):
+            ax.axvline(event["values"][parameter.path], color="tab:red", linestyle=":", linewidth=1)
+    for ax in (top, bottom):
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+    state = "" if result.completed else "  (stopped early)"
+    top.set_title(f"sweep of {', '.join(p.path for p in result.parameters)}{state}", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def plot_sweep_robots(result, path, count=5):
+    """The robot's centerline and actuators at ``count`` points spread along the branch, one
+    colour per point (labelled with the first parameter's value). Saves a PNG at ``path``."""
+    plt = _pyplot()
+    fig = plt.figure(figsize=(6.4, 6.4))
+    ax = fig.add_subplot(projection="3d")
+    chosen = np.unique(np.linspace(0, len(result.points) - 1, min(count, len(result.points))).round().astype(int))
+    colours = plt.cm.viridis(np.linspace(0, 0.9, len(chosen)))
+    everything, parameter = [], result.parameters[0]
+    for colour, index in zip(colours, chosen):
+        solution = result.points[index].solution
+        label = f"{parameter.path} = {result.points[index].values[0]:.4g} {parameter.unit}"
+        for m, module in enumerate(solution.modules):
+            ax.plot(*(module.p * 1e3), color=colour, linewidth=2.5, label=label if m == 0 else None)
+            everything.append(module.p * 1e3)
+        for actuator in solution.actuators.values():
+            style = "-" if actuator.kind == "tendon" or actuator.heated else "--"
+            ax.plot(*(_smooth(actuator.path) * 1e3), style, color=colour, linewidth=0.8, alpha=0.8)
+    _equal_axes(ax, np.hstack(everything))
+    ax.set_xlabel("x [mm]"), ax.set_ylabel("y [mm]"), ax.set_zlabel("z [mm]")
+    ax.set_title("robot along the sweep (thick: centerline; thin: heated TCAs and tendons, "
+                 "dashed: passive)", fontsize=8)
+    ax.legend(loc="upper left", fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

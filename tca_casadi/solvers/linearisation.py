@@ -1,0 +1,73 @@
+"""The square forward system ``g(w, P) = 0`` linearised at a point: sparse Jacobians from CasADi
+and what follows from them (sensitivities by the implicit function theorem, the sign of the
+Jacobian's determinant and its smallest singular value, which show folds).
+
+``w`` is the collocation NLP's scaled variable vector, ``P`` the robot's parameter vector.
+"""
+import numpy as np
+import scipy.sparse.linalg as spla
+
+
+class Linearisation:
+    """``g``, ``J_w = dg/dw`` (sparse, square), ``J_P = dg/dP`` and ``T_w, T_P``: the derivatives
+    of the tip position [m] at one point ``(w, P)``."""
+
+    def __init__(self, g, J_w, J_P, T_w, T_P):
+        self.g, self.J_w, self.J_P, self.T_w, self.T_P = g, J_w.tocsc(), J_P.tocsc(), T_w, T_P
+        self._lu = None
+
+    @property
+    def lu(self):
+        """Sparse LU of ``J_w`` (SuperLU), computed once."""
+        if self._lu is None:
+            self._lu = spla.splu(self.J_w, permc_spec="NATURAL")
+        return self._lu
+
+    def state_derivative(self, direction):
+        """``dw/dlam`` for ``P = P0 + lam direction`` (direction: (nP,) or (nP, k))."""
+        rhs = -(self.J_P @ np.asarray(direction, float))
+        return self.lu.solve(np.asarray(rhs, float))
+
+    def tip_derivative(self, direction):
+        """``d tip / d lam`` [m per unit of lam], shape (3,) or (3, k)."""
+        direction = np.asarray(direction, float)
+        return self.T_w @ self.state_derivative(direction) + self.T_P @ direction
+
+    def determinant_sign(self):
+        """Sign (+1, -1; 0 if singular) of ``det J_w``: a change between two points of a branch
+        means a fold or a bifurcation lies between them."""
+        diagonal = self.lu.U.diagonal()
+        if np.any(diagonal == 0):
+            return 0
+        sign = np.prod(np.sign(diagonal))
+        return int(sign * _parity(self.lu.perm_r) * _parity(self.lu.perm_c))
+
+    def smallest_singular_value(self, iterations=12, seed=0):
+        """Estimate of ``sigma_min(J_w)`` by inverse iteration on ``J_w^T J_w`` (two sparse
+        triangular solves per iteration, reusing the LU)."""
+        x = np.random.default_rng(seed).standard_normal(self.J_w.shape[0])
+        x /= np.linalg.norm(x)
+        growth = 1.0
+        for _ in range(iterations):
+            y = self.lu.solve(self.lu.solve(x, trans="T"))
+            growth = np.linalg.norm(y)
+            if not np.isfinite(growth) or growth == 0:
+                return 0.0
+            x = y / growth
+        return float(1.0 / np.sqrt(growth))
+
+
+def _parity(permutation):
+    """+1 for an even permutation, -1 for an odd one."""
+    permutation = np.asarray(permutation)
+    seen = np.zeros(permutation.size, bool)
+    sign = 1
+    for start in range(permutation.size):
+        if seen[start]:
+            continue
+        length, k = 0, start
+        while not seen[k]:
+            seen[k], k, length = True, permutation[k], length + 1
+        if length % 2 == 0:
+            sign = -sign
+    return sign

@@ -1,0 +1,126 @@
+"""Scalar study parameters addressed by scenario path: what a sweep moves and what inverse
+statics varies.
+
+A path names one entry of the robot's parameter vector (``robot.layout``), a component of a
+vector entry, or its magnitude:
+
+    bending.tca2.temperature     a TCA temperature [degC]
+    cable.tension / MOD.TENDON.tension   a tendon tension [N]
+    payload.force.x  (or .y, .z, [0], [1], [2])   one component [N]
+    gravity.magnitude            the length of a vector, its direction kept [m/s^2]
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ScenarioError
+from ..scenario.checks import closest
+from ..units import to_si
+
+#: last word of a layout name -> unit kind (for values given with units and CSV headers)
+KIND_OF = {"temperature": "temperature", "tension": "force", "force": "force", "moment": "moment",
+           "mass": "mass", "gravity": "acceleration", "position": "length",
+           "quaternion": "dimensionless"}
+UNIT_OF = {"temperature": "degC", "force": "N", "moment": "N m", "mass": "kg",
+           "acceleration": "m/s^2", "length": "m", "dimensionless": "-"}
+COMPONENTS = {"x": 0, "y": 1, "z": 2, "[0]": 0, "[1]": 1, "[2]": 2, "[3]": 3}
+
+
+@dataclass
+class StudyParameter:
+    """One scalar: ``value(P) = direction . P[slice]``; moving it by ``dv`` adds
+    ``dv * direction`` to ``P[slice]`` (``direction`` is a unit vector)."""
+    path: str
+    name: str                 # robot.layout name
+    slice: slice
+    direction: np.ndarray
+    kind: str                 # unit kind (units.KINDS)
+
+    @property
+    def unit(self):
+        return UNIT_OF[self.kind]
+
+    @property
+    def label(self):
+        return f"{self.path} [{self.unit}]"
+
+    def value(self, params):
+        return float(self.direction @ np.asarray(params)[self.slice])
+
+    def vector(self, size):
+        """``dP / d value`` as a full parameter-vector direction, shape (size,)."""
+        out = np.zeros(size)
+        out[self.slice] = self.direction
+        return out
+
+    def with_value(self, params, value):
+        """A copy of ``params`` with this parameter set to ``value``."""
+        out = np.array(params, float)
+        out[self.slice] += (value - self.value(params)) * self.direction
+        return out
+
+    def to_si(self, value, what="value"):
+        """``value`` (number or string with a unit) in this parameter's unit."""
+        try:
+            return to_si(value, self.kind)
+        except ValueError as exc:
+            raise ScenarioError(f"{what} for {self.path}: {exc}") from None
+
+
+def resolve_parameter(robot, params, path):
+    """The :class:`StudyParameter` for ``path``; :class:`ScenarioError` naming the valid paths."""
+    layout = robot.layout
+    name, component = _split(path, layout)
+    if name is None:
+        raise ScenarioError(f"{path!r} is not a study parameter{closest(path, _scalar_paths(layout))}"
+                            f" (vectors take .x/.y/.z or .magnitude)")
+    size = layout[name].stop - layout[name].start
+    kind = KIND_OF[name.rsplit(".", 1)[-1]]
+    if component is None:
+        if size != 1:
+            raise ScenarioError(f"{path!r} is a vector of {size}: name one component "
+                                f"({path}.x, {path}.y, {path}.z) or {path}.magnitude")
+        direction = np.ones(1)
+    elif component == "magnitude":
+        current = np.asarray(params)[layout[name]]
+        norm = float(np.linalg.norm(current))
+        if norm == 0.0:
+            raise ScenarioError(f"{path}: {name} is zero, so it has no direction to scale; "
+                                f"sweep a component instead ({name}.x ...)")
+        direction = current / norm
+    else:
+        if component >= size:
+            raise ScenarioError(f"{path!r}: {name} has {size} components")
+        direction = np.eye(size)[component]
+    return StudyParameter(path, name, layout[name], direction, kind)
+
+
+def _split(path, layout):
+    if path in layout:
+        return path, None
+    for suffix, index in list(COMPONENTS.items()) + [("magnitude", "magnitude")]:
+        for separator in (".", ""):
+            stem = path[:-len(separator + suffix)] if path.endswith(separator + suffix) else None
+            if stem and stem in layout and (separator or suffix.startswith("[")):
+                return stem, index
+    return None, None
+
+
+def _scalar_paths(layout):
+    out = []
+    for name in layout.names():
+        size = layout[name].stop - layout[name].start
+        out += [name] if size == 1 else [f"{name}.{c}" for c in "xyz"] + [f"{name}.magnitude"]
+    return out
+
+
+def resolve_parameters(robot, params, paths):
+    """Several parameters; the same entry twice is an error."""
+    resolved = [resolve_parameter(robot, params, path) for path in paths]
+    seen = {}
+    for p in resolved:
+        key = (p.name, tuple(np.round(p.direction, 12)))
+        if key in seen:
+            raise ScenarioError(f"{p.path!r} and {seen[key]!r} are the same parameter")
+        seen[key] = p.path
+    return resolved

@@ -1,0 +1,277 @@
+"""Continuation over parameters: the paper's Algorithm 1 as a study (``tca-casadi sweep``).
+
+Several scalar parameters move together along ``P(lam) = P_start + lam (P_stop - P_start)``,
+``lam`` from 0 to 1, on the collocation NLP built once.
+
+* **Natural continuation** (default): ``lam`` on a uniform grid; each step predicts along the
+  branch's tangent and corrects by Newton on the square system (IPOPT, warm-started, if Newton
+  fails). A step that fails, or whose end is inconsistent with the branch's tangents (a jump to
+  another branch, see :mod:`tca_casadi.solvers.continuation`), is halved, down to ``min_step``. Where no step succeeds the run stops and says why (near a fold the Jacobian
+  becomes singular: it says so).
+* **Pseudo-arclength** (``arclength=True``): ``(w, lam)`` advance together along the branch's
+  tangent; Newton corrects on the bordered system ``[g(w, P(lam)) = 0, t . (x - x_k) = ds]``
+  with sparse LU, so the branch is followed through folds (turning points in ``lam``), also
+  below the start value (down to half the range below it), until it reaches the stop value.
+
+Every accepted row carries the tip's derivative with respect to each swept parameter, from the
+implicit function theorem on CasADi's exact Jacobians: ``dtip/dv = T_w (-J_w^-1 J_P d) + T_P d``.
+"""
+import logging
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..errors import ScenarioError
+from ..solvers.continuation import BranchFollower
+from .parameters import resolve_parameters
+from .sweep_result import SweepResult, find_events
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class SweepPoint:
+    """One accepted point of the branch (``w`` scaled NLP variables)."""
+    lam: float
+    values: np.ndarray            # (k,) swept parameter values
+    solution: object              # Solution
+    w: np.ndarray
+    w_rate: np.ndarray            # dw/dlam (natural) or the tangent's w part (arclength)
+    lam_rate: float               # 1 (natural) or the tangent's lam part (arclength)
+    tip_derivative: np.ndarray    # (3, k) d tip / d value_j [m per unit]
+    det_sign: int
+    sigma_min: float
+    substeps: int = 1
+
+
+class Sweep:
+    """Move ``paths`` together from ``start`` to ``stop`` (scalars, or one per path; numbers in
+    the parameter's unit or strings with units) in ``steps`` points.
+
+    >>> result = Sweep(sim, ["bending.tca2.temperature", "bending.tca3.temperature"],
+    ...                25, 125, steps=51).run()
+    """
+
+    def __init__(self, sim, paths, start, stop, steps=51, arclength=False, min_step=1e-4,
+                 max_points=None, jump_tolerance=0.15):
+        if isinstance(paths, str):
+            paths = [paths]
+        if not paths:
+            raise ScenarioError("a sweep needs at least one parameter (--param PATH)")
+        if int(steps) < 2:
+            raise ScenarioError(f"a sweep needs at least 2 steps, got {steps}")
+        self.sim, self.steps, self.arclength = sim, int(steps), bool(arclength)
+        self.min_step = float(min_step)
+        self.max_points = int(max_points or 20 * self.steps)
+        self.solver = sim.solver("collocation")
+        self.parameters = resolve_parameters(sim.robot, sim.params, list(paths))
+        self.start = self._values(start, "start")
+        self.stop = self._values(stop, "stop")
+        base = sim.params.copy()
+        for parameter, value in zip(self.parameters, self.start):
+            base = parameter.with_value(base, value)
+        self.P_start = base
+        self.delta = sum(p.vector(base.size) * (b - a)
+                         for p, a, b in zip(self.parameters, self.start, self.stop))
+        self.directions = np.column_stack([p.vector(base.size) for p in self.parameters])
+        if not np.any(self.delta):
+            raise ScenarioError("the sweep's start and stop values are equal: nothing moves")
+        self.tolerance = sim.scenario.solver.tolerance
+        self.follower = BranchFollower(self.solver, self.P_start, self.delta, jump_tolerance)
+
+    def _values(self, given, what):
+        given = list(given) if isinstance(given, (list, tuple, np.ndarray)) else [given]
+        if len(given) == 1:
+            given = given * len(self.parameters)
+        if len(given) != len(self.parameters):
+            raise ScenarioError(f"{len(given)} {what} values for {len(self.parameters)} parameters")
+        return np.array([p.to_si(v, f"the {what} value") for p, v in zip(self.parameters, given)])
+
+    def params_at(self, lam):
+        return self.follower.params_at(lam)
+
+    def values_at(self, lam):
+        return self.start + lam * (self.stop - self.start)
+
+    # ------------------------------------------------------------------ running
+    def run(self, progress=None):
+        """Run the sweep; ``progress(fraction, text)`` is called after every accepted point.
+        Returns a :class:`SweepResult` (``completed`` False, with the reason, if it stopped)."""
+        started = time.perf_counter()
+        saved = self.sim.params.copy()
+        try:
+            self.sim.params = self.P_start.copy()
+            first = self.sim.solve(method="collocation")
+        finally:
+            self.sim.params = saved
+        if not first.converged:
+            return self._result([], False, f"no equilibrium at the start: {first.message}", started)
+        points = [self._record(self.follower.point(0.0, first))]
+        _report(progress, points[-1], self)
+        run = self._arclength if self.arclength else self._natural
+        completed, message = run(points, progress)
+        return self._result(points, completed, message, started)
+
+    def _result(self, points, completed, message, started):
+        return SweepResult(self.parameters, points, find_events(self.sim.robot, points, self.parameters),
+                           completed, message, "arclength" if self.arclength else "natural",
+                           time.perf_counter() - started)
+
+    # ------------------------------------------------------------------ one point
+    def _record(self, branch_point, substeps=1):
+        """A :class:`SweepPoint`: sensitivities and fold indicators from the point's linearisation."""
+        linear, lam = branch_point.linearisation, branch_point.lam
+        try:
+            tip_derivative = linear.tip_derivative(self.directions)
+            det_sign, sigma = linear.determinant_sign(), linear.smallest_singular_value()
+        except RuntimeError:                       # exactly singular: exactly at a fold
+            tip_derivative = np.full((3, len(self.parameters)), np.nan)
+            det_sign, sigma = 0, 0.0
+        return SweepPoint(lam, self.values_at(lam), branch_point.solution, branch_point.w,
+                          branch_point.w_rate, branch_point.lam_rate, tip_derivative, det_sign,
+                          sigma, substeps)
+
+    # ------------------------------------------------------------------ natural continuation
+    def _natural(self, points, progress):
+        spacing = 1.0 / (self.steps - 1)
+        current, h = points[-1], spacing
+        for index in range(1, self.steps):
+            current, h, substeps, failure = self.follower.advance(
+                current, index * spacing, h, spacing, self.min_step)
+            if failure is not None:
+                return False, self._stalled(points[0], self._record(current), failure)
+            points.append(self._record(current, substeps))
+            _report(progress, points[-1], self)
+        return True, f"completed {self.steps} steps"
+
+    def _stalled(self, first, last, failure):
+        where = _describe(self.parameters, last.values)
+        text = (f"stopped at {where}: no converged step down to a step of {self.min_step:g} "
+                f"of the range")
+        rate = np.max(np.abs(last.w_rate)) / max(np.max(np.abs(first.w_rate)), 1e-300)
+        sigma = last.sigma_min / max(first.sigma_min, 1e-300)
+        if failure.crossed or sigma < 0.1 or rate > 10:
+            return (f"{text}. The Jacobian is (nearly) singular there (smallest singular value "
+                    f"{last.sigma_min:.2e}, {sigma:.2g} x its value at the start; the branch's "
+                    f"rate of change {rate:.3g} x"
+                    + ("; its determinant changes sign within the step" if failure.crossed else "")
+                    + "): a fold (turning point) or a bifurcation. --arclength (arclength=True) "
+                      "follows the branch around a fold")
+        if failure.trial.converged:
+            return (f"{text}: the solver converged only off the branch (a jump to another branch; "
+                    f"inconsistency with the branch's tangents {failure.jump:.2g})")
+        return f"{text}: {failure.trial.message}"
+
+    # ------------------------------------------------------------------ pseudo-arclength
+    def _arclength(self, points, progress):
+        current = points[-1]
+        tangent = _normalise(np.r_[current.w_rate, 1.0])
+        ds = np.linalg.norm(np.r_[current.w_rate, 1.0]) / (self.steps - 1)
+        ds_max, ds_min = 4 * ds, self.min_step * ds
+        current = self._record(self.follower.point(0.0, current.solution, current.w, tangent))
+        points[-1] = current
+        while len(points) < self.max_points:
+            corrected = self._correct(current, tangent, ds)
+            if corrected is None:
+                ds /= 2
+                if ds < ds_min:
+                    return False, (f"stopped at {_describe(self.parameters, current.values)}: "
+                                   f"the arclength corrector failed down to a step of {ds_min:.2g}")
+                continue
+            w, lam, linear, iterations, elapsed = corrected
+            tangent = self._tangent(linear, tangent)
+            if lam > 1.0 and tangent[-1] > 0:
+                return self._finish(points, current, progress)
+            solution = self.solver.evaluate(w, self.params_at(lam), _newton_status(
+                self.solver.max_residual(w, self.params_at(lam)), self.tolerance, iterations, elapsed))
+            current = self._record(self.follower.point(lam, solution, w, tangent))
+            points.append(current)
+            _report(progress, current, self)
+            if lam < -0.5:
+                return False, ("the branch turned back and left the swept range (below the start "
+                               f"by half the range) after a fold; stopped at "
+                               f"{_describe(self.parameters, current.values)}")
+            ds = min(1.5 * ds, ds_max) if iterations <= 3 else ds
+        return False, f"stopped after {self.max_points} points (max_points) before reaching the stop value"
+
+    def _finish(self, points, current, progress):
+        """Land exactly on lam = 1 from the last point before it."""
+        final = self.solver.solve(self.params_at(1.0), current.solution)
+        if not final.converged:
+            return False, f"the last step to the stop value failed: {final.message}"
+        tangent = np.r_[current.w_rate, current.lam_rate]
+        tangent = self._tangent(self.solver.linearise(final.raw["w"], self.params_at(1.0)), tangent)
+        points.append(self._record(self.follower.point(1.0, final, tangent=tangent)))
+        _report(progress, points[-1], self)
+        return True, f"reached the stop value in {len(points)} points (pseudo-arclength)"
+
+    def _correct(self, current, tangent, ds, max_iterations=12):
+        """Newton on ``[g(w, P(lam)); t . ((w, lam) - (w_k, lam_k)) - ds]`` from the predictor.
+        Returns ``(w, lam, linearisation, iterations, seconds)`` or None."""
+        started = time.perf_counter()
+        x = np.r_[current.w, current.lam] + ds * tangent
+        anchor = np.r_[current.w, current.lam]
+        square = self.solver.square
+        for iteration in range(max_iterations + 1):
+            g, J_w = square.evaluate(x[:-1], self.params_at(x[-1]))
+            arc = tangent @ (x - anchor) - ds
+            if np.max(np.abs(g)) <= self.tolerance and abs(arc) <= self.tolerance:
+                if np.max(np.abs(x - anchor - ds * tangent)) > 0.5 * ds:      # left the branch
+                    return None
+                linear = self.solver.linearise(x[:-1], self.params_at(x[-1]))
+                return x[:-1], x[-1], linear, iteration, time.perf_counter() - started
+            if iteration == max_iterations:
+                return None
+            step = _solve_bordered(J_w, self._lam_column(x), tangent, np.r_[g, arc])
+            if step is None or not np.all(np.isfinite(step)) or np.max(np.abs(step)) > 10:
+                return None
+            x = x - step
+        return None
+
+    def _lam_column(self, x):
+        """``dg/dlam = J_P delta`` at ``x = (w, lam)``."""
+        return self.solver.square.parameter_jacobian(x[:-1], self.params_at(x[-1])) @ self.delta
+
+    def _tangent(self, linear, previous):
+        """Unit tangent of the branch at a point, oriented along ``previous``."""
+        rhs = np.zeros(previous.size)
+        rhs[-1] = 1.0
+        tangent = _solve_bordered(linear.J_w, linear.J_P @ self.delta, previous, rhs)
+        if tangent is None:
+            return previous
+        return _normalise(tangent)
+
+
+def _solve_bordered(J_w, column, border, rhs):
+    """Solve ``[[J_w, column], [border^T]] x = rhs`` (sparse LU); None if singular."""
+    column = sp.csc_matrix(np.asarray(column, float).reshape(-1, 1))
+    matrix = sp.bmat([[J_w, column], [sp.csr_matrix(border[:-1].reshape(1, -1)),
+                                      sp.csr_matrix(border[-1:].reshape(1, 1))]], format="csc")
+    try:
+        return spla.splu(matrix).solve(np.asarray(rhs, float))
+    except RuntimeError:
+        return None
+
+
+def _normalise(vector):
+    return vector / np.linalg.norm(vector)
+
+
+def _newton_status(residual, tolerance, iterations, elapsed):
+    converged = residual <= 10 * tolerance
+    return {"converged": converged, "status": "Newton (pseudo-arclength corrector)",
+            "message": f"pseudo-arclength Newton corrector: {iterations} iterations, max scaled "
+                       f"residual {residual:.1e}", "max_residual": residual,
+            "iterations": iterations, "solve_time_s": elapsed}
+
+
+def _describe(parameters, values):
+    return ", ".join(f"{p.path} = {v:.6g} {p.unit}" for p, v in zip(parameters, values))
+
+
+def _report(progress, point, sweep):
+    if progress is not None:
+        progress(min(max(point.lam, 0.0), 1.0), _describe(sweep.parameters[:1], point.values[:1]))

@@ -1,0 +1,175 @@
+"""The result of a sweep: the accepted points, the events along the branch, a CSV table."""
+import csv
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..model.rotations import matrix_to_quaternion
+
+
+@dataclass
+class SweepResult:
+    """``points`` (list of SweepPoint, in branch order), ``events`` (dicts: kind, between,
+    values, message), ``completed`` (reached the stop value), ``message``, ``method``
+    ('natural' or 'arclength'), ``total_time_s``."""
+    parameters: list
+    points: list
+    events: list
+    completed: bool
+    message: str
+    method: str
+    total_time_s: float
+
+    @property
+    def solutions(self):
+        return [p.solution for p in self.points]
+
+    @property
+    def values(self):
+        """(n_points, k) swept values."""
+        return np.array([p.values for p in self.points])
+
+    @property
+    def tip_positions(self):
+        """(n_points, 3) [m]."""
+        return np.array([p.solution.tip_position for p in self.points])
+
+    def tensions(self, key):
+        """(n_points,) tension [N] of actuator ``key`` ('MODULE.NAME')."""
+        return np.array([p.solution.actuators[key].tension for p in self.points])
+
+    # ------------------------------------------------------------------ table
+    def rows(self):
+        """One dict per point; keys are CSV headers with units."""
+        return [self._row(i, point) for i, point in enumerate(self.points)]
+
+    def _row(self, index, point):
+        solution = point.solution
+        row = {"step": index, "lambda [-]": point.lam}
+        row.update({p.label: v for p, v in zip(self.parameters, point.values)})
+        row.update({"converged": bool(solution.converged), "iterations": solution.iterations,
+                    "substeps": point.substeps, "solve_time [s]": solution.solve_time_s})
+        for axis, value in zip("xyz", solution.tip_position):
+            row[f"tip_{axis} [m]"] = value
+        for axis, value in zip("wxyz", matrix_to_quaternion(solution.tip_rotation)):
+            row[f"tip_q{axis} [-]"] = value
+        row["bending_angle [deg]"] = np.degrees(bending_angle(solution))
+        for key, actuator in solution.actuators.items():
+            row[f"{key}.tension [N]"] = actuator.tension
+            row[f"{key}.stroke [m]"] = actuator.stroke
+            if actuator.free_stroke is not None:
+                row[f"{key}.free_stroke [m]"] = actuator.free_stroke
+        for j, p in enumerate(self.parameters):
+            for axis, value in zip("xyz", point.tip_derivative[:, j]):
+                row[f"dtip_{axis}/d{p.path} [m/{p.unit}]"] = value
+        row["jacobian_det_sign"] = point.det_sign
+        row["jacobian_sigma_min [-]"] = point.sigma_min
+        return row
+
+    def to_csv(self, path):
+        rows = self.rows()
+        path = Path(path)
+        with path.open("w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=list(rows[0]) if rows else ["step"])
+            writer.writeheader()
+            for row in rows:
+                writer.writerow({k: _format(v) for k, v in row.items()})
+        return path
+
+    def to_dict(self):
+        return {"method": self.method, "completed": self.completed, "message": self.message,
+                "total_time_s": self.total_time_s, "points": len(self.points),
+                "parameters": [p.label for p in self.parameters], "events": self.events}
+
+    def save(self, directory, plots=True, robots=5):
+        """Write ``sweep.csv``, ``sweep.json`` (status and events) and, with ``plots``,
+        ``sweep.png`` and ``sweep_robots.png``; return the paths."""
+        directory = Path(directory)
+        directory.mkdir(parents=True, exist_ok=True)
+        written = [self.to_csv(directory / "sweep.csv"), directory / "sweep.json"]
+        written[1].write_text(json.dumps(self.to_dict(), indent=2))
+        if plots and self.points:
+            from ..plotting.sweep_plots import plot_sweep, plot_sweep_robots
+            written.append(plot_sweep(self, directory / "sweep.png"))
+            written.append(plot_sweep_robots(self, directory / "sweep_robots.png", robots))
+        return written
+
+    def summary(self):
+        state = "completed" if self.completed else "STOPPED"
+        lines = [f"sweep ({self.method}): {state}, {len(self.points)} points in "
+                 f"{self.total_time_s:.2f} s: {self.message}"]
+        if self.points:
+            first, last = self.points[0], self.points[-1]
+            move = (last.solution.tip_position - first.solution.tip_position) * 1e3
+            lines.append("  tip moved [mm]: " + " ".join(f"{v:+.4f}" for v in move))
+        lines += [f"  event: {event['message']}" for event in self.events]
+        return "\n".join(lines)
+
+
+def bending_angle(solution):
+    """Angle [rad] between the base tangent (first module) and the tip tangent (last module)."""
+    base = solution.modules[0].R[:, 2, 0]
+    tip = solution.modules[-1].R[:, 2, -1]
+    return float(np.arctan2(np.linalg.norm(np.cross(base, tip)), base @ tip))
+
+
+def _format(value):
+    if isinstance(value, (bool, np.bool_)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return f"{float(value):.12g}"
+    return value
+
+
+# ---------------------------------------------------------------------- events
+def find_events(robot, points, parameters):
+    """Events between consecutive points: a TCA tension changing sign or leaving the law's fit
+    range, the Jacobian's determinant changing sign, a fold (lam turning back, arclength)."""
+    events = []
+    if len(points) < 2:
+        return events
+    far = max(points, key=lambda p: abs(p.lam - points[0].lam))
+    slope = (far.values - points[0].values) / (far.lam - points[0].lam)
+
+    def event(kind, lam, text):
+        values = points[0].values + (lam - points[0].lam) * slope
+        where = ", ".join(f"{p.path} = {v:.6g} {p.unit}" for p, v in zip(parameters, values))
+        events.append({"kind": kind, "lambda": float(lam),
+                       "values": {p.path: float(v) for p, v in zip(parameters, values)},
+                       "message": f"{text} near {where}"})
+
+    for index, (a, b) in enumerate(zip(points[:-1], points[1:])):
+        between = lambda fraction: a.lam + fraction * (b.lam - a.lam)   # noqa: E731
+        for actuator in robot.tcas:
+            fa, fb = (p.solution.actuators[actuator.key].tension for p in (a, b))
+            if fa * fb < 0 or (fa != 0 and fb == 0):
+                event("tension_sign", between(fa / (fa - fb)),
+                      f"{actuator.key} tension changes sign ({fa * 1e3:.4g} -> {fb * 1e3:.4g} mN)")
+            limit = actuator.law.monotone_limit
+            if (fa - limit) * (fb - limit) < 0:
+                event("fit_range", between((fa - limit) / (fa - fb)),
+                      f"{actuator.key} tension crosses the fit's monotone limit {limit * 1e3:.4g} mN")
+        if a.lam_rate * b.lam_rate < 0:
+            event("fold", _turning_lambda(points, index),
+                  "fold (turning point): the branch turns back; the Jacobian is singular there")
+        elif a.det_sign * b.det_sign < 0:
+            event("singular_jacobian", between(0.5), "the Jacobian's determinant changes sign: "
+                  "a fold or a bifurcation lies between these points")
+    return events
+
+
+def _turning_lambda(points, index):
+    """lam at the turn between points ``index`` and ``index + 1``: the vertex of the parabola
+    ``lam(sigma)`` through three points around it (sigma: arclength in (w, lam))."""
+    trio = points[index:index + 3] if index + 2 < len(points) else points[max(index - 1, 0):index + 2]
+    a, b = points[index], points[index + 1]
+    if len(trio) < 3:
+        return a.lam + a.lam_rate / (a.lam_rate - b.lam_rate) * (b.lam - a.lam)
+    steps = [np.linalg.norm(np.r_[q.w - p.w, q.lam - p.lam]) for p, q in zip(trio[:-1], trio[1:])]
+    sigma = np.r_[0.0, np.cumsum(steps)]
+    coefficients = np.polyfit(sigma, [p.lam for p in trio], 2)
+    if coefficients[0] == 0:
+        return b.lam
+    return float(np.polyval(coefficients, -coefficients[1] / (2 * coefficients[0])))
