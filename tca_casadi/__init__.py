@@ -11,9 +11,9 @@ from .model import Robot, TcaLaw
 from .scenario import Scenario, load_scenario
 from .simulation import Simulation, solve
 from .solution import Solution
-from .studies import Sweep, SweepResult
+from .studies import InverseResult, InverseStatics, Sweep, SweepResult, Target
 
 __version__ = "0.1.0"
 
-__all__ = ["Simulation", "solve", "Solution", "Sweep", "SweepResult", "Scenario", "load_scenario", "Robot", "TcaLaw",
+__all__ = ["Simulation", "solve", "Solution", "Sweep", "SweepResult", "InverseStatics", "InverseResult", "Target", "Scenario", "load_scenario", "Robot", "TcaLaw",
            "ScenarioError", "SolverError", "ModelError", "TcaError", "PhysicsWarning"]

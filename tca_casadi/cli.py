@@ -1,13 +1,16 @@
-"""Command line: ``tca-casadi validate|solve|check|sweep SCENARIO ...``.
+"""Command line: ``tca-casadi validate|solve|check|sweep|inverse SCENARIO ...``.
 
 Exit codes: 0 success, 1 the solver did not converge (``check``: the solvers disagree),
-2 bad input (one line on stderr). ``sweep``: 1 when the run stopped before the stop value.
+2 bad input (one line on stderr). ``sweep``: 1 when the run stopped before the stop value;
+``inverse``: 1 when a target is unreachable (the closest pose is still written).
 """
 import argparse
 import json
 import logging
 import sys
 from pathlib import Path
+
+import numpy as np
 
 from .errors import ScenarioError, TcaError
 
@@ -66,6 +69,30 @@ def build_parser():
                        help="output directory (default: results/<scenario name>/sweep)")
     sweep.add_argument("--no-plot", action="store_true", help="do not draw sweep.png and sweep_robots.png")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+
+    inverse = commands.add_parser("inverse", help="inverse statics: TCA temperatures for a target tip pose")
+    _scenario_arguments(inverse)
+    inverse.add_argument("--target-position", nargs=3, metavar=("X", "Y", "Z"),
+                         help="target position [m] (or with units, '12 mm'); default: the scenario's inverse.target")
+    where = inverse.add_mutually_exclusive_group()
+    where.add_argument("--target-direction", nargs=3, type=float, metavar=("DX", "DY", "DZ"),
+                       help="also aim the point's tangent along this direction")
+    where.add_argument("--target-orientation", nargs=4, type=float, metavar=("QW", "QX", "QY", "QZ"),
+                       help="also match this orientation (quaternion) of the point's frame")
+    inverse.add_argument("--point", default=None, help="'tip' (default) or a module name (its end)")
+    inverse.add_argument("--vary", action="append", default=None, metavar="PATH",
+                         help="temperature to vary (repeatable; default: every TCA)")
+    inverse.add_argument("--bounds", nargs=2, metavar=("LO", "HI"),
+                         help="temperature bounds [degC] (default: each TCA type's reference to max temperature)")
+    inverse.add_argument("--tolerance", default=None, metavar="M",
+                         help="position error under which the target counts as reached (default 0.1 mm)")
+    inverse.add_argument("--starts", type=int, default=None, help="initial temperature sets tried (default 4)")
+    inverse.add_argument("--path", type=Path, default=None, metavar="CSV",
+                         help="a CSV of targets (x, y, z [m], optional dx, dy, dz or qw..qz): one answer per row")
+    inverse.add_argument("-o", "--output", type=Path, default=None,
+                         help="output directory (default: results/<scenario name>/inverse)")
+    inverse.add_argument("--no-plot", action="store_true", help="do not draw inverse.png")
+    inverse.add_argument("--quiet", action="store_true", help="no progress bar (--path)")
     return parser
 
 
@@ -145,6 +172,45 @@ def _sweep(args):
     return 0 if result.completed else 1
 
 
+def _inverse(args):
+    from .simulation import Simulation
+    from .studies.inverse import InverseStatics, Target, read_targets, write_path_results
+    from .units import to_si
+    sim = Simulation.from_file(args.scenario, args.overrides)
+    tolerance = None
+    if args.tolerance is not None:
+        try:
+            tolerance = to_si(_number(args.tolerance), "length")
+        except ValueError as exc:
+            raise ScenarioError(f"--tolerance: {exc}") from None
+    solver = InverseStatics.from_scenario(sim, vary=args.vary, bounds=args.bounds, tolerance=tolerance,
+                                          starts=args.starts)
+    output = args.output or Path("results") / sim.scenario.name / "inverse"
+    if args.path is not None:
+        targets = read_targets(args.path, args.point or "tip")
+        results = _with_progress(lambda progress: solver.track(targets, progress), "inverse", args.quiet)
+        output.mkdir(parents=True, exist_ok=True)
+        written = write_path_results(output / "inverse_path.csv", results)
+        reached = sum(r.reachable for r in results)
+        print(f"inverse path: {reached}/{len(results)} targets reached; "
+              f"median {np.median([r.solve_time_s for r in results]) * 1e3:.0f} ms per target")
+        print(f"wrote {written}")
+        return 0 if reached == len(results) else 1
+    if args.target_position is None:
+        target = solver.scenario_target(args.point)
+    else:
+        try:
+            position = [to_si(_number(v), "length") for v in args.target_position]
+        except ValueError as exc:
+            raise ScenarioError(f"--target-position: {exc}") from None
+        target = Target.create(position, args.target_direction, args.target_orientation, args.point or "tip")
+    result = solver.solve(target)
+    written = result.save(output, plot=not args.no_plot)
+    print(result.summary())
+    print("wrote " + ", ".join(str(p) for p in written))
+    return 0 if result.reachable and result.verified else 1
+
+
 def _number(text):
     """A plain number where the text is one; else the text (a value with a unit)."""
     try:
@@ -166,7 +232,8 @@ def _with_progress(run, label, quiet=False):
         return run(progress=lambda fraction, text: bar.update(task, completed=fraction, description=text))
 
 
-COMMANDS = {"validate": _validate, "solve": _solve, "check": _check, "sweep": _sweep}
+COMMANDS = {"validate": _validate, "solve": _solve, "check": _check, "sweep": _sweep,
+            "inverse": _inverse}
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -164,6 +164,7 @@ class Robot:
             for key in ("force", "moment", "mass"):
                 load.pop(key, None)
         data.pop("gravity"), data.pop("base"), data.pop("name"), data.pop("description")
+        data.pop("inverse", None)
         return repr(data)
 
 

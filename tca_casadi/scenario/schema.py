@@ -313,6 +313,37 @@ class SolverOptions(Strict):
     continuation: Literal["auto", "always", "never"] = "auto"
 
 
+# ----------------------------------------------------------------------------- inverse statics
+class InverseTarget(Strict):
+    """A target pose for inverse statics: a position, and optionally the tip tangent's direction
+    or a full orientation (quaternion [w, x, y, z]) of the point's frame."""
+    position: Vector3Length
+    direction: Optional[Vector3] = None
+    orientation: Optional[Quaternion] = None
+    point: str = "tip"
+
+    @model_validator(mode="after")
+    def _one_orientation(self):
+        if self.direction is not None and self.orientation is not None:
+            raise ValueError("give a direction or an orientation, not both")
+        for name in ("direction", "orientation"):
+            value = getattr(self, name)
+            if value is not None and math.sqrt(sum(v * v for v in value)) == 0:
+                raise ValueError(f"{name} must not be zero")
+        return self
+
+
+class InverseOptions(Strict):
+    """Inverse statics (SPEC section 6): which temperatures vary, their bounds, the target."""
+    target: Optional[InverseTarget] = None
+    vary: Optional[list[str]] = None
+    bounds: Optional[Annotated[tuple[float, float], _vector("temperature", 2)]] = None
+    tolerance: Annotated[float, _quantity("length"), Field(gt=0)] = 1e-4
+    regularisation: Annotated[float, Field(ge=0)] = 1e-3
+    orientation_weight: Annotated[float, Field(ge=0)] = 1.0
+    starts: int = Field(default=4, ge=1, le=64)
+
+
 class Scenario(Strict):
     """A whole robot: modules in series from a base, loads, gravity and solver options."""
     name: str = "scenario"
@@ -324,5 +355,6 @@ class Scenario(Strict):
     modules: list[Module] = Field(min_length=1)
     loads: list[Load] = Field(default_factory=list)
     solver: SolverOptions = Field(default_factory=SolverOptions)
+    inverse: Optional[InverseOptions] = None
     _raw: Optional[dict] = PrivateAttr(default=None)
     _sources: object = PrivateAttr(default=None)

@@ -1,0 +1,464 @@
+"""Inverse statics (SPEC section 6): a target pose in, TCA temperatures out.
+
+The forward collocation constraints ``g(w, P(tau)) = 0`` stay as equality constraints; the
+varied temperatures become bounded decision variables ``T_j = lo_j + (hi_j - lo_j) tau_j``,
+``tau_j`` in [0, 1]; the objective is the pose error of a chosen point (a module's end, the tip by
+default)::
+
+    f = |p - p*|^2 / e_p^2  +  w_o [(1 - t . d*) + (3 - tr(R*^T R)) / 2] / (e_a^2 / 2)
+        +  eps sum tau_j^2
+
+``e_p`` and ``e_a`` are the position and angle tolerances (0.1 mm, 1 deg: an error at the
+tolerance costs 1), ``t`` the point's tangent (``R e_z``), ``d*`` a target direction and ``R*``
+a target orientation (each term only when asked; both are ``1 - cos(angle)``). The last term,
+least total heating (``eps`` = ``regularisation``, default 1e-3), picks one answer where several
+reach the target; it moves a reachable answer by about ``eps e_p^2 / |dp/dtau|``, nanometres. IPOPT solves it with exact
+first and second derivatives from CasADi; the NLP is built once and the target, weights and all
+other parameters (loads, gravity, ...) are NLP parameters.
+"""
+import logging
+import time
+from dataclasses import dataclass, field
+from typing import Optional
+
+import casadi as ca
+import numpy as np
+from scipy.stats import qmc
+
+from ..errors import ScenarioError
+from ..model.rotations import ROTATION, rotation_angle, rotation_numpy
+from ..scenario.checks import closest
+from .parameters import resolve_parameters
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class Target:
+    """A target pose [m]: ``position``; optionally ``direction`` (the point's tangent, unit) or
+    ``orientation`` (quaternion [w, x, y, z] of the point's frame); ``point``: 'tip' or a module."""
+    position: np.ndarray
+    direction: Optional[np.ndarray] = None
+    orientation: Optional[np.ndarray] = None
+    point: str = "tip"
+
+    @classmethod
+    def create(cls, position, direction=None, orientation=None, point="tip"):
+        """Validated target; :class:`ScenarioError` names what is wrong."""
+        position = _finite_vector(position, 3, "target position")
+        if direction is not None and orientation is not None:
+            raise ScenarioError("give a target direction or a target orientation, not both")
+        if direction is not None:
+            direction = _unit(_finite_vector(direction, 3, "target direction"), "target direction")
+        if orientation is not None:
+            orientation = _unit(_finite_vector(orientation, 4, "target orientation"), "target orientation")
+        return cls(position, direction, orientation, point)
+
+
+def _finite_vector(value, size, what):
+    try:
+        array = np.asarray(value, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ScenarioError(f"{what}: expected {size} numbers, got {value!r}") from None
+    if array.size != size:
+        raise ScenarioError(f"{what}: expected {size} numbers, got {array.size}")
+    if not np.all(np.isfinite(array)):
+        raise ScenarioError(f"{what}: {array.tolist()} is not finite (NaN or inf)")
+    return array
+
+
+def _unit(vector, what):
+    norm = np.linalg.norm(vector)
+    if norm == 0:
+        raise ScenarioError(f"{what} must not be zero")
+    return vector / norm
+
+
+@dataclass
+class InverseResult:
+    """The answer to one query (SI, temperatures degC)."""
+    target: Target
+    temperatures: dict                 # {path: value}
+    position: np.ndarray               # achieved position of the target point [m]
+    rotation: np.ndarray               # achieved frame (3, 3)
+    position_error: float              # [m]
+    angle_error: Optional[float]       # [rad] (direction or orientation), None if not asked
+    reachable: bool
+    converged: bool
+    objective: float
+    forward: object                    # Solution at the temperatures (independent forward solve)
+    verification_difference: float     # |forward point - reported point| [m]
+    solve_time_s: float
+    iterations: int
+    starts: int
+    message: str
+    w: np.ndarray = field(repr=False, default=None)
+    tau: np.ndarray = field(repr=False, default=None)
+
+    @property
+    def verified(self):
+        return self.verification_difference <= 1e-6
+
+    def to_dict(self):
+        angle = None if self.angle_error is None else float(np.degrees(self.angle_error))
+        return {"reachable": bool(self.reachable), "converged": bool(self.converged),
+                "message": self.message,
+                "target": {"position": self.target.position.tolist(), "point": self.target.point,
+                           "direction": None if self.target.direction is None else self.target.direction.tolist(),
+                           "orientation": None if self.target.orientation is None else self.target.orientation.tolist()},
+                "temperatures": {k: float(v) for k, v in self.temperatures.items()},
+                "achieved": {"position": self.position.tolist(), "rotation_matrix": self.rotation.tolist()},
+                "position_error": float(self.position_error), "angle_error_deg": angle,
+                "verification_difference": float(self.verification_difference),
+                "verified": bool(self.verified), "objective": float(self.objective),
+                "solve_time_s": float(self.solve_time_s), "iterations": int(self.iterations),
+                "starts": int(self.starts)}
+
+    def save(self, directory, plot=True):
+        """Write ``inverse.json``, the forward ``solution.json`` + ``arrays.npz`` and, with
+        ``plot``, ``inverse.png`` (the robot, the target and the reached point)."""
+        import json
+        from pathlib import Path
+        directory = Path(directory)
+        directory.mkdir(parents=True, exist_ok=True)
+        path = directory / "inverse.json"
+        path.write_text(json.dumps(self.to_dict(), indent=2))
+        written = [path, *self.forward.save(directory)]
+        if plot:
+            from ..plotting import save_robot_png
+            state = "reached" if self.reachable else f"UNREACHABLE, {self.position_error * 1e3:.3g} mm away"
+            written.append(save_robot_png(
+                self.forward, directory / "inverse.png", title=f"inverse statics: target {state}",
+                extra_points=[(self.target.position, "target", "magenta"),
+                              (self.position, "reached", "blue")]))
+        return written
+
+    def summary(self):
+        state = "REACHED" if self.reachable else "UNREACHABLE"
+        lines = [f"inverse: {state} ({self.message})",
+                 "  target [mm]:   " + " ".join(f"{v * 1e3:+.4f}" for v in self.target.position),
+                 "  achieved [mm]: " + " ".join(f"{v * 1e3:+.4f}" for v in self.position),
+                 f"  position error {self.position_error * 1e3:.4g} mm"
+                 + ("" if self.angle_error is None else f", angle error {np.degrees(self.angle_error):.4g} deg"),
+                 f"  forward check: {self.verification_difference:.2e} m "
+                 f"({'verified' if self.verified else 'NOT VERIFIED'})",
+                 f"  {self.solve_time_s * 1e3:.0f} ms, {self.iterations} IPOPT iterations, {self.starts} start(s)"]
+        lines += [f"  {path:<28}{value:9.3f} degC" for path, value in self.temperatures.items()]
+        return "\n".join(lines)
+
+
+class InverseStatics:
+    """Inverse statics on the collocation NLP of ``sim``.
+
+    ``vary``: temperature paths (default every TCA of the chain); ``bounds``: ``(lo, hi)`` degC for
+    all of them (default each TCA type's reference to maximum temperature); ``tolerance``: the
+    position error [m] under which a target counts as reached; ``angle_tolerance`` [rad] likewise;
+    ``starts``: initial temperature sets tried from a cold start (stopping at the first that
+    reaches the target).
+    """
+
+    def __init__(self, sim, vary=None, bounds=None, tolerance=1e-4, angle_tolerance=np.radians(1.0),
+                 regularisation=1e-3, orientation_weight=1.0, starts=4):
+        self.sim, self.robot = sim, sim.robot
+        self.solver = sim.solver("collocation")
+        vary = list(vary) if vary else [a.parameter for a in self.robot.tcas]
+        if not vary:
+            raise ScenarioError("inverse statics needs TCAs to heat; the scenario has none")
+        self.parameters = resolve_parameters(self.robot, sim.params, vary)
+        for parameter in self.parameters:
+            if parameter.kind != "temperature":
+                raise ScenarioError(f"inverse statics varies TCA temperatures; {parameter.path} is not one")
+        self.bounds = self._bounds(bounds)
+        self.tolerance, self.angle_tolerance = float(tolerance), float(angle_tolerance)
+        self.regularisation, self.orientation_weight = float(regularisation), float(orientation_weight)
+        self.starts = int(starts)
+        self.length = sum(m.length for m in self.robot.modules)
+        started = time.perf_counter()
+        self._build()
+        self.build_time_s = time.perf_counter() - started
+
+    @classmethod
+    def from_scenario(cls, sim, **overrides):
+        """Options from the scenario's ``inverse:`` section (if any), then ``overrides``."""
+        section = sim.scenario.inverse
+        options = {}
+        if section is not None:
+            options = {"vary": section.vary, "bounds": section.bounds, "tolerance": section.tolerance,
+                       "regularisation": section.regularisation,
+                       "orientation_weight": section.orientation_weight, "starts": section.starts}
+        options.update({k: v for k, v in overrides.items() if v is not None})
+        return cls(sim, **options)
+
+    def scenario_target(self, point=None):
+        """The target of the scenario's ``inverse:`` section (:class:`ScenarioError` if none)."""
+        section = self.sim.scenario.inverse
+        if section is None or section.target is None:
+            raise ScenarioError("no target: give one (--target-position X Y Z) or an inverse.target "
+                                "in the scenario")
+        given = section.target
+        return Target.create(given.position, given.direction, given.orientation, point or given.point)
+
+    # ------------------------------------------------------------------ bounds
+    def _type_range(self, parameter):
+        module_name, actuator_name = parameter.name.split(".")[:2]
+        module = next(m for m in self.sim.scenario.modules if m.name == module_name)
+        actuator = next(a for a in module.actuators if a.name == actuator_name)
+        kind = self.sim.scenario.tca_types[actuator.type]
+        return kind.reference_temperature, kind.max_temperature, actuator.type
+
+    def _bounds(self, bounds):
+        out = []
+        for parameter in self.parameters:
+            low, high, type_name = self._type_range(parameter)
+            if bounds is None:
+                out.append((low, high))
+                continue
+            lo, hi = (parameter.to_si(b, "the bound") for b in bounds)
+            if not lo < hi:
+                raise ScenarioError(f"bounds [{lo:g}, {hi:g}] degC are inverted or empty (need lower < upper)")
+            if lo < low - 1e-9 or hi > high + 1e-9:
+                raise ScenarioError(
+                    f"bounds [{lo:g}, {hi:g}] degC leave {parameter.path}'s range [{low:g}, {high:g}] degC "
+                    f"(tca_types.{type_name}: reference_temperature to max_temperature)")
+            out.append((lo, hi))
+        return np.array(out, float)
+
+    # ------------------------------------------------------------------ the NLP
+    def _build(self):
+        nlp, robot = self.solver.nlp, self.robot
+        k, n_modules = len(self.parameters), len(robot.modules)
+        tau = ca.MX.sym("tau", k)
+        fixed = ca.MX.sym("P", robot.layout.size)
+        target = ca.MX.sym("target", 3 + 3 + 9 + 3 + n_modules)
+        position, direction = target[0:3], target[3:6]
+        R_target = ca.reshape(target[6:15], 3, 3)
+        w_position, w_direction, w_rotation = target[15], target[16], target[17]
+        select = target[18:18 + n_modules]
+        P = fixed
+        for j, parameter in enumerate(self.parameters):
+            vector = ca.DM(parameter.vector(robot.layout.size))
+            value = self.bounds[j, 0] + (self.bounds[j, 1] - self.bounds[j, 0]) * tau[j]
+            P = P + vector * (value - ca.dot(vector, fixed))
+        ends = nlp.outputs(nlp.w, P)[1]                               # (13, n_modules)
+        state = ends @ select
+        R = ROTATION(state[3:7])
+        error = state[0:3] - position
+        angle_scale = self.angle_tolerance**2 / 2
+        objective = (w_position * ca.sumsqr(error) / self.tolerance**2
+                     + w_direction * (1 - ca.dot(R[:, 2], direction)) / angle_scale
+                     + w_rotation * (3 - ca.trace(R_target.T @ R)) / 2 / angle_scale
+                     + self.regularisation * ca.sumsqr(tau))
+        constraints = ca.Function("g", [nlp.w, nlp.P], [nlp.problem["g"]])(nlp.w, P)
+        problem = {"x": ca.vertcat(nlp.w, tau), "p": ca.vertcat(fixed, target),
+                   "f": objective, "g": constraints}
+        # the start is an equilibrium (feasible) with tau inside the box: a small initial barrier
+        options = {"print_level": 0, "sb": "yes", "tol": 1e-8, "mu_init": 1e-6,
+                   "constr_viol_tol": self.sim.scenario.solver.tolerance, "max_iter": 300,
+                   "nlp_scaling_method": "none", "bound_relax_factor": 0.0}
+        self._ipopt = ca.nlpsol("inverse", "ipopt", problem,
+                                {"ipopt": options, "print_time": False, "error_on_fail": False,
+                                 "expand": True})
+        self._pose = ca.Function("pose", [nlp.w, tau, fixed, target], [state[0:3], R]).expand()
+        self._n_w = nlp.w.numel()
+
+    def _target_vector(self, target):
+        names = [m.name for m in self.robot.modules]
+        point = names[-1] if target.point == "tip" else target.point
+        if point not in names:
+            raise ScenarioError(f"target point {target.point!r} is not 'tip' or a module{closest(target.point, names)}")
+        select = np.zeros(len(names))
+        select[names.index(point)] = 1.0
+        direction = target.direction if target.direction is not None else np.zeros(3)
+        R_target = rotation_numpy(target.orientation) if target.orientation is not None else np.eye(3)
+        weights = [1.0, self.orientation_weight * (target.direction is not None),
+                   self.orientation_weight * (target.orientation is not None)]
+        return np.r_[target.position, direction, R_target.ravel(order="F"), weights, select]
+
+    # ------------------------------------------------------------------ queries
+    def values(self, tau):
+        return self.bounds[:, 0] + (self.bounds[:, 1] - self.bounds[:, 0]) * np.asarray(tau)
+
+    def params_at(self, tau):
+        params = self.sim.params.copy()
+        for parameter, value in zip(self.parameters, self.values(tau)):
+            params = parameter.with_value(params, value)
+        return params
+
+    def start_points(self):
+        """Initial ``tau``: the middle of the box, then a scrambled Sobol' set (seed 0)."""
+        points = [np.full(len(self.parameters), 0.5)]
+        if self.starts > 1:
+            sobol = qmc.Sobol(len(self.parameters), scramble=True, seed=0)
+            points += list(sobol.random(2 ** int(np.ceil(np.log2(self.starts - 1))))[: self.starts - 1])
+        return points
+
+    def solve(self, target, initial=None):
+        """Temperatures that bring the target point to ``target`` (a :class:`Target`).
+
+        ``initial``: a previous :class:`InverseResult` (path tracking: one warm-started solve,
+        multi-start only if it fails). Returns an :class:`InverseResult`; an unreachable target
+        is not an error: the closest reachable pose, ``reachable=False`` and the distance."""
+        started = time.perf_counter()
+        vector = self._target_vector(target)
+        best, iterations, tried = None, 0, 0
+        seeds = [(initial.w, initial.tau)] if initial is not None and initial.w is not None else []
+        seeds += [None] * 0
+        candidates = seeds + self.start_points()
+        for candidate in candidates:
+            w0, tau0 = candidate if isinstance(candidate, tuple) else (self._forward_w(candidate), candidate)
+            if w0 is None:
+                continue
+            tried += 1
+            attempt = self._attempt(w0, tau0, vector, target)
+            iterations += attempt["iterations"]
+            if attempt["equilibrium"] and (best is None or _better(attempt, best)):
+                best = attempt
+            if best is not None and self._reached(best):
+                break
+        if best is None:
+            best = attempt
+        return self._result(target, best, time.perf_counter() - started, iterations, tried)
+
+    def track(self, targets, progress=None):
+        """Solve a path of targets, each warm-started from the previous answer."""
+        results, previous = [], None
+        for index, target in enumerate(targets):
+            previous = self.solve(target, previous)
+            results.append(previous)
+            if progress is not None:
+                progress((index + 1) / len(targets), f"target {index + 1}/{len(targets)}")
+        return results
+
+    def _forward_w(self, tau):
+        """Scaled forward-solution variables at temperatures ``tau`` (continuation from rest)."""
+        saved = self.sim.params.copy()
+        try:
+            self.sim.params = self.params_at(tau)
+            solution = self.sim.solve(method="collocation")
+        finally:
+            self.sim.params = saved
+        return solution.raw["w"] if solution.converged else None
+
+    def _attempt(self, w0, tau0, vector, target):
+        result = self._ipopt(x0=np.r_[w0, tau0], p=np.r_[self.sim.params, vector],
+
+                             lbx=np.r_[np.full(self._n_w, -np.inf), np.zeros(len(tau0))],
+                             ubx=np.r_[np.full(self._n_w, np.inf), np.ones(len(tau0))],
+                             lbg=0.0, ubg=0.0)
+        stats = self._ipopt.stats()
+        x = np.array(result["x"]).ravel()
+        w, tau = x[:self._n_w], np.clip(x[self._n_w:], 0.0, 1.0)
+        residual = self.solver.max_residual(w, self.params_at(tau))
+        equilibrium = residual <= 10 * self.sim.scenario.solver.tolerance
+        converged = equilibrium and bool(stats["success"])
+        position, R = (np.array(v) for v in self._pose(w, tau, self.sim.params, vector))
+        position = position.ravel()
+        return {"w": w, "tau": tau, "converged": converged, "equilibrium": equilibrium,
+                "objective": float(result["f"]),
+                "iterations": int(stats.get("iter_count", 0)), "status": stats["return_status"],
+                "position": position, "R": R, "residual": residual,
+                "position_error": float(np.linalg.norm(position - target.position)),
+                "angle_error": self._angle_error(R, target)}
+
+    def _angle_error(self, R, target):
+        if target.direction is not None:
+            return float(np.arccos(np.clip(R[:, 2] @ target.direction, -1.0, 1.0)))
+        if target.orientation is not None:
+            return float(rotation_angle(R, rotation_numpy(target.orientation)))
+        return None
+
+    def _reached(self, attempt):
+        """An equilibrium (constraints satisfied) within the tolerances of the target."""
+        angle_ok = attempt["angle_error"] is None or attempt["angle_error"] <= self.angle_tolerance
+        return attempt["equilibrium"] and attempt["position_error"] <= self.tolerance and angle_ok
+
+    def _result(self, target, best, elapsed, iterations, tried):
+        temperatures = {p.path: float(v) for p, v in zip(self.parameters, self.values(best["tau"]))}
+        forward, difference = self._verify(best, target)
+        reachable = self._reached(best)
+        if not best["equilibrium"]:
+            message = f"IPOPT did not converge ({best['status']}, constraint residual {best['residual']:.1e})"
+        elif reachable:
+            message = "target reached" + ("" if best["converged"] else f" (IPOPT: {best['status']})")
+        elif not best["converged"]:
+            message = (f"no start reached the target; the closest pose found, "
+                       f"{best['position_error'] * 1e3:.4g} mm away, is not proven optimal "
+                       f"(IPOPT: {best['status']})")
+        else:
+            message = (f"target unreachable within the bounds: the closest pose found is "
+                       f"{best['position_error'] * 1e3:.4g} mm away")
+        return InverseResult(target, temperatures, best["position"], best["R"], best["position_error"],
+                             best["angle_error"], reachable, best["converged"], best["objective"],
+                             forward, difference, elapsed, iterations, tried, message,
+                             best["w"], best["tau"])
+
+    def _verify(self, best, target):
+        """Independent forward solve (from the reference state) at the answer's temperatures."""
+        saved = self.sim.params.copy()
+        try:
+            self.sim.params = self.params_at(best["tau"])
+            forward = self.sim.solve(method="collocation")
+        finally:
+            self.sim.params = saved
+        names = [m.name for m in forward.modules]
+        point = names[-1] if target.point == "tip" else target.point
+        achieved = forward.modules[names.index(point)].tip_position
+        difference = float(np.linalg.norm(achieved - best["position"])) if forward.converged else np.inf
+        return forward, difference
+
+
+def _better(attempt, best):
+    """Prefer an IPOPT-optimal attempt, then the lower objective."""
+    return (attempt["converged"], -attempt["objective"]) > (best["converged"], -best["objective"])
+
+
+def read_targets(path, point="tip"):
+    """Targets from a CSV with columns x, y, z [m] and optionally dx, dy, dz (a direction) or
+    qw, qx, qy, qz (an orientation); header names may carry units (``x [m]``)."""
+    import csv
+    from pathlib import Path
+    try:
+        handle = Path(path).open(newline="")
+    except OSError as exc:
+        raise ScenarioError(f"cannot read the target path {path}: {exc.strerror}") from None
+    with handle:
+        reader = csv.DictReader(handle)
+        columns = {name.split("[")[0].strip().lower(): name for name in (reader.fieldnames or [])}
+        if not {"x", "y", "z"} <= set(columns):
+            raise ScenarioError(f"{path}: the target path needs columns x, y, z [m]; found {reader.fieldnames}")
+        targets = []
+        for line, row in enumerate(reader, start=2):
+            def take(keys):
+                if not all(k in columns and row[columns[k]].strip() for k in keys):
+                    return None
+                try:
+                    return [float(row[columns[k]]) for k in keys]
+                except ValueError:
+                    raise ScenarioError(f"{path}:{line}: not a number in {[row[columns[k]] for k in keys]}") from None
+            try:
+                targets.append(Target.create(take("xyz"), take(("dx", "dy", "dz")),
+                                             take(("qw", "qx", "qy", "qz")), point))
+            except ScenarioError as exc:
+                raise ScenarioError(f"{path}:{line}: {exc}") from None
+    if not targets:
+        raise ScenarioError(f"{path}: no targets")
+    return targets
+
+
+def write_path_results(path, results):
+    """One row per target: target, temperatures, achieved position, errors, status, time."""
+    import csv
+    with open(path, "w", newline="") as handle:
+        writer = csv.writer(handle)
+        temperature_names = list(results[0].temperatures)
+        writer.writerow(["row", "target_x [m]", "target_y [m]", "target_z [m]"]
+                        + [f"{name} [degC]" for name in temperature_names]
+                        + ["x [m]", "y [m]", "z [m]", "position_error [m]", "angle_error [deg]",
+                           "reachable", "verified", "solve_time [s]", "iterations"])
+        for index, r in enumerate(results):
+            angle = "" if r.angle_error is None else f"{np.degrees(r.angle_error):.8g}"
+            writer.writerow([index, *(f"{v:.10g}" for v in r.target.position),
+                             *(f"{r.temperatures[n]:.8g}" for n in temperature_names),
+                             *(f"{v:.10g}" for v in r.position), f"{r.position_error:.4g}", angle,
+                             int(r.reachable), int(r.verified), f"{r.solve_time_s:.4g}", r.iterations])
+    return path
