@@ -87,6 +87,9 @@ def build_parser():
     inverse.add_argument("--tolerance", default=None, metavar="M",
                          help="position error under which the target counts as reached (default 0.1 mm)")
     inverse.add_argument("--starts", type=int, default=None, help="initial temperature sets tried (default 4)")
+    inverse.add_argument("--method", choices=["ipopt", "reduced"], default=None,
+                         help="ipopt: the full-space NLP (default); reduced: least squares over the "
+                              "temperatures with the equilibrium solved and differentiated exactly (faster)")
     inverse.add_argument("--path", type=Path, default=None, metavar="CSV",
                          help="a CSV of targets (x, y, z [m], optional dx, dy, dz or qw..qz): one answer per row")
     inverse.add_argument("-o", "--output", type=Path, default=None,
@@ -184,7 +187,7 @@ def _inverse(args):
         except ValueError as exc:
             raise ScenarioError(f"--tolerance: {exc}") from None
     solver = InverseStatics.from_scenario(sim, vary=args.vary, bounds=args.bounds, tolerance=tolerance,
-                                          starts=args.starts)
+                                          starts=args.starts, method=args.method)
     output = args.output or Path("results") / sim.scenario.name / "inverse"
     if args.path is not None:
         targets = read_targets(args.path, args.point or "tip")

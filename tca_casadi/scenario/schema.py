@@ -305,12 +305,13 @@ Load = Annotated[Union[PointLoad, MassLoad, DistributedLoad], Field(discriminato
 class SolverOptions(Strict):
     """How to discretise and solve (SPEC section 6)."""
     method: Literal["collocation", "shooting"] = "collocation"
-    intervals: int = Field(default=12, ge=1, le=2000)
+    intervals: Union[Annotated[int, Field(ge=1, le=2000)], Literal["auto"]] = "auto"
     degree: int = Field(default=4, ge=1, le=9)
     scheme: Literal["legendre", "radau"] = "legendre"
     tolerance: float = Field(default=1e-10, gt=0, lt=1e-2)
     max_iterations: int = Field(default=200, ge=1)
     continuation: Literal["auto", "always", "never"] = "auto"
+    algorithm: Literal["ipopt", "newton"] = "ipopt"
 
 
 # ----------------------------------------------------------------------------- inverse statics
@@ -342,6 +343,7 @@ class InverseOptions(Strict):
     regularisation: Annotated[float, Field(ge=0)] = 1e-3
     orientation_weight: Annotated[float, Field(ge=0)] = 1.0
     starts: int = Field(default=4, ge=1, le=64)
+    method: Literal["ipopt", "reduced"] = "ipopt"
 
 
 class Scenario(Strict):

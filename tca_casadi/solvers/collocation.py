@@ -48,7 +48,19 @@ class CollocationSolver:
         return reference_guess(self.nlp, params)
 
     def solve(self, params, initial=None):
-        """Solve at parameter vector ``params``, warm-started from ``initial`` (a Solution)."""
+        """Solve at parameter vector ``params``, warm-started from ``initial`` (a Solution).
+
+        ``solver.algorithm: newton`` tries Newton's method on the square system first (from the
+        warm start, or the reference shape) and falls back to IPOPT if it fails; ``ipopt`` (the
+        default) goes to IPOPT directly."""
+        if self.options.algorithm == "newton":
+            newton = self.solve_newton(params, self.initial_guess(params, initial))
+            if newton.converged:
+                return newton
+        return self.solve_ipopt(params, initial)
+
+    def solve_ipopt(self, params, initial=None):
+        """IPOPT on the square NLP at ``params``, warm-started from ``initial`` (a Solution)."""
         params = np.asarray(params, dtype=float)
         w0 = self.initial_guess(params, initial)
         start = time.perf_counter()

@@ -62,7 +62,7 @@ class BranchFollower:
         predicted = current.w + (lam - current.lam) * current.w_rate
         trial = self.solver.solve_newton(self.params_at(lam), predicted)
         if not trial.converged:
-            trial = self.solver.solve(self.params_at(lam), current.solution)
+            trial = self.solver.solve_ipopt(self.params_at(lam), current.solution)
         self.iterations += trial.iterations
         return trial
 

@@ -25,21 +25,34 @@ class NewtonResult:
     message: str
 
 
+class _Buffered:
+    """A CasADi Function evaluated into preallocated numpy arrays (CasADi's buffer API)."""
+
+    def __init__(self, function):
+        self.inputs = [np.zeros(function.nnz_in(i)) for i in range(function.n_in())]
+        self.outputs = [np.zeros(function.nnz_out(i)) for i in range(function.n_out())]
+        self._buffer, self._evaluate = function.buffer()
+        for index, array in enumerate(self.inputs):
+            self._buffer.set_arg(index, memoryview(array))
+        for index, array in enumerate(self.outputs):
+            self._buffer.set_res(index, memoryview(array))
+
+    def __call__(self, *values):
+        for array, value in zip(self.inputs, values):
+            array[:] = value
+        self._evaluate()
+        return self.outputs
+
+
 class SquareSystem:
     """``g`` and ``J_w = dg/dw`` at ``(w, P)`` for the NLP ``nlp`` solved by ``ipopt``."""
 
     def __init__(self, nlp, ipopt):
         self.nlp = nlp
-        function = ipopt.get_function("nlp_jac_g")
-        self._w, self._P = np.zeros(function.nnz_in(0)), np.zeros(function.nnz_in(1))
-        self._g, self._J = np.zeros(function.nnz_out(0)), np.zeros(function.nnz_out(1))
-        buffer, self._evaluate = function.buffer()
-        for index, array in enumerate((self._w, self._P)):
-            buffer.set_arg(index, memoryview(array))
-        for index, array in enumerate((self._g, self._J)):
-            buffer.set_res(index, memoryview(array))
-        self._buffer = buffer                       # keep alive: it holds the pointers
-        sparsity = function.sparsity_out(1)
+        jacobian = ipopt.get_function("nlp_jac_g")
+        self._with_jacobian = _Buffered(jacobian)
+        self._residual = _Buffered(ipopt.get_function("nlp_g"))
+        sparsity = jacobian.sparsity_out(1)
         colind, row = sparsity.get_ccs()
         self._indptr, self._indices = np.array(colind), np.array(row)
         self.shape = (sparsity.size1(), sparsity.size2())
@@ -47,15 +60,20 @@ class SquareSystem:
 
     def evaluate(self, w, P):
         """``(g, J_w)``: copies of the residual (n,) and the Jacobian (CSC)."""
-        self._w[:], self._P[:] = w, P
-        self._evaluate()
-        J = sp.csc_matrix((self._J.copy(), self._indices, self._indptr), shape=self.shape)
-        return self._g.copy(), J
+        g, J = self._with_jacobian(w, P)
+        return g.copy(), sp.csc_matrix((J.copy(), self._indices, self._indptr), shape=self.shape)
+
+    def residual(self, w, P):
+        """A copy of ``g(w, P)`` (n,)."""
+        return self._residual(w, P)[0].copy()
 
     def newton(self, w0, P, tolerance, max_iterations=25):
-        """Damped Newton from ``w0`` until ``max |g| <= tolerance`` (backtracking on ``|g|_2``)."""
-        w = np.array(w0, float)
-        g, J = self.evaluate(w, P)
+        """Newton from ``w0`` until ``max |g| <= tolerance``. The factorised Jacobian is kept while
+        steps contract the residual by at least half (a chord step costs one residual evaluation
+        and two triangular solves); otherwise it is refreshed and the full Newton step is
+        backtracked on ``|g|_2``."""
+        w, lu, fresh = np.array(w0, float), None, False
+        g = self.residual(w, P)
         for iteration in range(max_iterations + 1):
             residual = float(np.max(np.abs(g))) if g.size else 0.0
             if not np.isfinite(residual):
@@ -64,11 +82,19 @@ class SquareSystem:
                 return NewtonResult(w, True, iteration, residual, f"Newton: converged in {iteration} iterations")
             if iteration == max_iterations:
                 break
+            if lu is not None and not fresh:
+                trial = w - lu.solve(g)
+                g_trial = self.residual(trial, P)
+                if np.all(np.isfinite(g_trial)) and np.linalg.norm(g_trial) <= 0.5 * np.linalg.norm(g):
+                    w, g = trial, g_trial
+                    continue
             try:
-                step = spla.splu(J, permc_spec="NATURAL").solve(g)
+                _, J = self.evaluate(w, P)
+                lu, fresh = spla.splu(J, permc_spec="NATURAL"), True
             except RuntimeError:
                 return NewtonResult(w, False, iteration, residual, "Newton: singular Jacobian")
-            w, g, J, accepted = self._line_search(w, g, step, P)
+            w, g, accepted = self._line_search(w, g, lu.solve(g), P)
+            fresh = False
             if not accepted:
                 return NewtonResult(w, False, iteration, residual, "Newton: no descent along the step")
         return NewtonResult(w, False, max_iterations, residual,
@@ -78,11 +104,11 @@ class SquareSystem:
         norm, alpha = np.linalg.norm(g), 1.0
         while alpha >= shortest:
             trial = w - alpha * step
-            g_trial, J_trial = self.evaluate(trial, P)
+            g_trial = self.residual(trial, P)
             if np.all(np.isfinite(g_trial)) and np.linalg.norm(g_trial) < (1 - 1e-4 * alpha) * norm:
-                return trial, g_trial, J_trial, True
+                return trial, g_trial, True
             alpha /= 2
-        return w, g, None, False
+        return w, g, False
 
     # ------------------------------------------------------------------ sensitivities
     def _sensitivity_function(self):

@@ -28,6 +28,7 @@ from scipy.stats import qmc
 from ..errors import ScenarioError
 from ..model.rotations import ROTATION, rotation_angle, rotation_numpy
 from ..scenario.checks import closest
+from ..solvers.continuation import BranchFollower
 from .parameters import resolve_parameters
 
 log = logging.getLogger(__name__)
@@ -158,7 +159,10 @@ class InverseStatics:
     """
 
     def __init__(self, sim, vary=None, bounds=None, tolerance=1e-4, angle_tolerance=np.radians(1.0),
-                 regularisation=1e-3, orientation_weight=1.0, starts=4):
+                 regularisation=1e-3, orientation_weight=1.0, starts=4, method="ipopt"):
+        if method not in ("ipopt", "reduced"):
+            raise ScenarioError(f"unknown inverse method {method!r}; available: ipopt, reduced")
+        self.method = method
         self.sim, self.robot = sim, sim.robot
         self.solver = sim.solver("collocation")
         vary = list(vary) if vary else [a.parameter for a in self.robot.tcas]
@@ -172,6 +176,7 @@ class InverseStatics:
         self.tolerance, self.angle_tolerance = float(tolerance), float(angle_tolerance)
         self.regularisation, self.orientation_weight = float(regularisation), float(orientation_weight)
         self.starts = int(starts)
+        self._forward_cache = {}
         self.length = sum(m.length for m in self.robot.modules)
         started = time.perf_counter()
         self._build()
@@ -185,7 +190,8 @@ class InverseStatics:
         if section is not None:
             options = {"vary": section.vary, "bounds": section.bounds, "tolerance": section.tolerance,
                        "regularisation": section.regularisation,
-                       "orientation_weight": section.orientation_weight, "starts": section.starts}
+                       "orientation_weight": section.orientation_weight, "starts": section.starts,
+                       "method": section.method}
         options.update({k: v for k, v in overrides.items() if v is not None})
         return cls(sim, **options)
 
@@ -260,6 +266,16 @@ class InverseStatics:
                                  "expand": True})
         self._pose = ca.Function("pose", [nlp.w, tau, fixed, target], [state[0:3], R]).expand()
         self._n_w = nlp.w.numel()
+        # the same objective as a sum of squares, for the reduced-space method
+        residuals = ca.vertcat(ca.sqrt(w_position) * error / self.tolerance,
+                               ca.sqrt(w_direction) * (R[:, 2] - direction) / self.angle_tolerance,
+                               ca.sqrt(w_rotation) * ca.vec(R - R_target) / (np.sqrt(2) * self.angle_tolerance),
+                               np.sqrt(self.regularisation) * tau)
+        self._residuals = ca.Function("residuals", [nlp.w, tau, fixed, target],
+                                      [residuals, ca.jacobian(residuals, nlp.w),
+                                       ca.jacobian(residuals, tau)]).expand()
+        self._dP_dtau = np.column_stack([p.vector(robot.layout.size) * (hi - lo)
+                                         for p, (lo, hi) in zip(self.parameters, self.bounds)])
 
     def _target_vector(self, target):
         names = [m.name for m in self.robot.modules]
@@ -329,17 +345,30 @@ class InverseStatics:
                 progress((index + 1) / len(targets), f"target {index + 1}/{len(targets)}")
         return results
 
+    def _forward(self, tau):
+        """The forward Solution at temperatures ``tau`` (continuation from the reference state),
+        cached per parameter vector: starts are shared by all queries."""
+        params = self.params_at(tau)
+        key = params.tobytes()
+        if key not in self._forward_cache:
+            saved = self.sim.params.copy()
+            try:
+                self.sim.params = params
+                self._forward_cache[key] = self.sim.solve(method="collocation")
+            finally:
+                self.sim.params = saved
+        return self._forward_cache[key]
+
     def _forward_w(self, tau):
-        """Scaled forward-solution variables at temperatures ``tau`` (continuation from rest)."""
-        saved = self.sim.params.copy()
-        try:
-            self.sim.params = self.params_at(tau)
-            solution = self.sim.solve(method="collocation")
-        finally:
-            self.sim.params = saved
+        solution = self._forward(tau)
         return solution.raw["w"] if solution.converged else None
 
     def _attempt(self, w0, tau0, vector, target):
+        if self.method == "reduced":
+            from .inverse_reduced import reduced_attempt
+            w, tau, status, iterations = reduced_attempt(self, w0, tau0, vector)
+            return self._describe_attempt(w, tau, status == "success", float("nan"), iterations,
+                                          status, vector, target)
         result = self._ipopt(x0=np.r_[w0, tau0], p=np.r_[self.sim.params, vector],
 
                              lbx=np.r_[np.full(self._n_w, -np.inf), np.zeros(len(tau0))],
@@ -348,14 +377,20 @@ class InverseStatics:
         stats = self._ipopt.stats()
         x = np.array(result["x"]).ravel()
         w, tau = x[:self._n_w], np.clip(x[self._n_w:], 0.0, 1.0)
+        return self._describe_attempt(w, tau, bool(stats["success"]), float(result["f"]),
+                                      int(stats.get("iter_count", 0)), stats["return_status"],
+                                      vector, target)
+
+    def _describe_attempt(self, w, tau, success, objective, iterations, status, vector, target):
         residual = self.solver.max_residual(w, self.params_at(tau))
         equilibrium = residual <= 10 * self.sim.scenario.solver.tolerance
-        converged = equilibrium and bool(stats["success"])
+        converged = equilibrium and success
         position, R = (np.array(v) for v in self._pose(w, tau, self.sim.params, vector))
         position = position.ravel()
+        if not np.isfinite(objective):
+            objective = float(np.sum(np.array(self._residuals(w, tau, self.sim.params, vector)[0]) ** 2))
         return {"w": w, "tau": tau, "converged": converged, "equilibrium": equilibrium,
-                "objective": float(result["f"]),
-                "iterations": int(stats.get("iter_count", 0)), "status": stats["return_status"],
+                "objective": objective, "iterations": iterations, "status": status,
                 "position": position, "R": R, "residual": residual,
                 "position_error": float(np.linalg.norm(position - target.position)),
                 "angle_error": self._angle_error(R, target)}
@@ -393,16 +428,26 @@ class InverseStatics:
                              best["w"], best["tau"])
 
     def _verify(self, best, target):
-        """Independent forward solve (from the reference state) at the answer's temperatures."""
-        saved = self.sim.params.copy()
-        try:
-            self.sim.params = self.params_at(best["tau"])
-            forward = self.sim.solve(method="collocation")
-        finally:
-            self.sim.params = saved
+        """Independent forward solve at the answer's temperatures: predictor-corrector
+        continuation from the first start's forward equilibrium (not from the answer's state),
+        or from the reference state if that fails."""
+        params = self.params_at(best["tau"])
+        start = self._forward(self.start_points()[0])
+        forward = None
+        if start.converged:
+            follower = BranchFollower(self.solver, start.parameters, params - start.parameters)
+            point, _, _, failure = follower.advance(follower.point(0.0, start), 1.0, 0.5, 0.5, 1e-3)
+            forward = None if failure is not None else point.solution
+        if forward is None:
+            saved = self.sim.params.copy()
+            try:
+                self.sim.params = params
+                forward = self.sim.solve(method="collocation")
+            finally:
+                self.sim.params = saved
         names = [m.name for m in forward.modules]
-        point = names[-1] if target.point == "tip" else target.point
-        achieved = forward.modules[names.index(point)].tip_position
+        point_name = names[-1] if target.point == "tip" else target.point
+        achieved = forward.modules[names.index(point_name)].tip_position
         difference = float(np.linalg.norm(achieved - best["position"])) if forward.converged else np.inf
         return forward, difference
 

@@ -45,7 +45,8 @@ def test_base_reaction_balances_the_weight(bending):
     sim, solution = bending
     module = sim.robot.modules[0]
     weight = module.weight_density * module.length * np.array(sim.get_parameter("gravity"))
-    assert solution.modules[0].base_reaction["force"] == pytest.approx(-weight, abs=1e-12)
+    # each scaled equilibrium row holds to 10 x tolerance x EI/L^2 = 1.2e-12 N; 16 points add up
+    assert solution.modules[0].base_reaction["force"] == pytest.approx(-weight, abs=2e-11)
 
 
 def test_new_temperature_reuses_the_built_nlp_and_warm_starts(bending):

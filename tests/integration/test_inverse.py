@@ -20,10 +20,11 @@ def set_temperatures(sim, paths, values):
     return sim.solve()
 
 
-@pytest.fixture(scope="module")
-def bending():
+@pytest.fixture(scope="module", params=["ipopt", "reduced"])
+def bending(request):
+    """The bending module's inverse problem, by the full-space NLP (IPOPT) and the reduced path."""
     sim = Simulation.from_file(BENDING)
-    return sim, InverseStatics(sim, bounds=(25, 125))
+    return sim, InverseStatics(sim, bounds=(25, 125), method=request.param)
 
 
 def test_round_trip_from_random_temperatures(bending):
@@ -81,7 +82,8 @@ def arm():
     return Simulation.from_file(raw)
 
 
-def test_arm_position_and_rotation_about_its_axis():
+@pytest.mark.parametrize("method", ["ipopt", "reduced"])
+def test_arm_position_and_rotation_about_its_axis(method):
     sim = arm()
     paths = [a.parameter for a in sim.robot.tcas]
     assert len(paths) == 4
@@ -89,7 +91,7 @@ def test_arm_position_and_rotation_about_its_axis():
     twist = rotation_angle(truth.modules[0].tip_rotation, truth.tip_rotation)
     assert twist > np.radians(60)                        # the twisting module turns the tip
     target = Target.create(truth.tip_position, orientation=matrix_to_quaternion(truth.tip_rotation))
-    answer = InverseStatics(sim, bounds=(25, 125)).solve(target)
+    answer = InverseStatics(sim, bounds=(25, 125), method=method).solve(target)
     assert answer.reachable and answer.verified
     assert answer.position_error <= 1e-4 and answer.angle_error <= np.radians(1.0)
     assert answer.temperatures["twisting.tca.temperature"] == pytest.approx(110, abs=1.0)
@@ -112,6 +114,7 @@ def test_bad_targets_are_named(make, message):
     ({"bounds": (25, 200)}, r"range \[25, 150\]"),
     ({"vary": ["tip_force.force.x"]}, "not one"),
     ({"vary": ["bending.tca4.temperature"]}, "did you mean"),
+    ({"method": "newton"}, "unknown inverse method"),
 ])
 def test_bad_options_are_named(bending, options, message):
     sim, _ = bending
@@ -138,7 +141,8 @@ def test_inverse_command_from_the_scenario_section(tmp_path, capsys):
 def test_inverse_command_path_and_errors(tmp_path, capsys):
     targets = tmp_path / "targets.csv"
     targets.write_text("x [m],y [m],z [m]\n-0.010,0,-0.040\n-0.012,0.001,-0.039\n-0.08,0,0\n")
-    code = main(["inverse", str(BENDING), "--path", str(targets), "-o", str(tmp_path), "--quiet"])
+    code = main(["inverse", str(BENDING), "--path", str(targets), "-o", str(tmp_path), "--quiet",
+                 "--method", "reduced"])
     assert code == 1                                            # the last target is out of reach
     with (tmp_path / "inverse_path.csv").open() as handle:
         rows = list(csv.DictReader(handle))

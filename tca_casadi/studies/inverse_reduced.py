@@ -1,0 +1,79 @@
+"""The reduced-space path for inverse statics (``InverseStatics(method="reduced")``).
+
+The same objective as a sum of squares ``r(w, tau)``, minimised over the temperatures only, with
+the equilibrium ``g(w, P(tau)) = 0`` solved at every trial ``tau`` (Newton on the square system
+from the tangent predictor, continuation if Newton fails) and eliminated by the implicit
+function theorem: ``dr/dtau = r_w (-J_w^-1 J_P dP/dtau) + r_tau``, exact, with one sparse LU per
+iteration. scipy's trust-region reflective least squares keeps ``tau`` in [0, 1]. Every iterate
+is an equilibrium, so the constraints hold exactly as in the full-space NLP.
+"""
+import numpy as np
+from scipy.optimize import least_squares
+
+from ..solvers.continuation import BranchFollower
+
+
+class _Equilibria:
+    """Forward equilibria ``w(tau)``, each started from the nearest known one."""
+
+    def __init__(self, inverse, w0, tau0):
+        self.inverse, self.solver = inverse, inverse.solver
+        self.tau, self.w, self.rate = np.array(tau0, float), np.asarray(w0, float), None
+        self.failed = False
+
+    def __call__(self, tau):
+        tau = np.asarray(tau, float)
+        if np.array_equal(tau, self.tau):
+            return self.w
+        params = self.inverse.params_at(tau)
+        predicted = self.w if self.rate is None else self.w + self.rate @ (tau - self.tau)
+        newton = self.solver.square.newton(predicted, params, self.inverse.sim.scenario.solver.tolerance)
+        w = newton.w if newton.converged else self._continue(params)
+        if w is not None:
+            self.tau, self.w, self.rate = tau.copy(), w, None
+        return w
+
+    def _continue(self, params):
+        """Predictor-corrector continuation from the last equilibrium to ``params``."""
+        start = self.inverse.params_at(self.tau)
+        follower = BranchFollower(self.solver, start, params - start)
+        solution = self.solver.evaluate(self.w, start, {"converged": True, "status": "start",
+                                                        "message": "", "max_residual": 0.0,
+                                                        "iterations": 0, "solve_time_s": 0.0})
+        point, _, _, failure = follower.advance(follower.point(0.0, solution), 1.0, 0.5, 0.5, 1e-3)
+        return None if failure is not None else point.w
+
+
+def reduced_attempt(inverse, w0, tau0, vector):
+    """Minimise from ``(w0, tau0)``. Returns ``(w, tau, status, iterations)``; status is
+    'success' when least squares converged on equilibria throughout."""
+    equilibria = _Equilibria(inverse, w0, tau0)
+    fixed = inverse.sim.params
+    size = int(inverse._residuals.size1_out(0))
+
+    def residuals(tau):
+        w = equilibria(tau)
+        if w is None:                                   # no equilibrium reached: a bad trial point
+            equilibria.failed = True
+            return np.full(size, 1e6)
+        return np.array(inverse._residuals(w, tau, fixed, vector)[0]).ravel()
+
+    def jacobian(tau):
+        w = equilibria(tau)
+        if w is None:
+            return np.zeros((size, len(tau)))
+        linear = inverse.solver.linearise(w, inverse.params_at(tau))
+        rate = linear.state_derivative(inverse._dP_dtau)                  # (n, k)
+        equilibria.rate = rate
+        _, r_w, r_tau = inverse._residuals(w, tau, fixed, vector)
+        return r_w.sparse() @ rate + np.array(r_tau)
+
+    result = least_squares(residuals, np.clip(tau0, 0.0, 1.0), jac=jacobian, bounds=(0.0, 1.0),
+                           method="trf", x_scale=1.0, xtol=1e-12, ftol=1e-12, gtol=1e-10,
+                           max_nfev=200)
+    tau = np.clip(result.x, 0.0, 1.0)
+    w = equilibria(tau)
+    if w is None:
+        return np.asarray(w0, float), np.asarray(tau0, float), "no equilibrium at the answer", result.nfev
+    status = "success" if result.status > 0 else f"least squares: {result.message}"
+    return w, tau, status, int(result.nfev)

@@ -1,0 +1,73 @@
+"""The fast path for the forward problem (Newton on the square system) gives the same solutions
+as IPOPT, on every shipped scenario, warm and cold."""
+import numpy as np
+import pytest
+
+from conftest import SCENARIOS
+from tca_casadi import Simulation
+
+SHIPPED = sorted(SCENARIOS.rglob("*.yaml"))
+
+
+def nudge(sim):
+    """A small change of every actuator parameter (+1 degC, +1 % tension) and load (+1 %)."""
+    for name in sim.robot.layout.names():
+        if name.endswith(".temperature"):
+            sim.set_parameter(name, sim.get_parameter(name) + 1.0)
+        elif name.endswith((".tension", ".force", ".moment", ".mass")):
+            sim.set_parameter(name, 1.01 * np.asarray(sim.get_parameter(name)))
+
+
+def assert_same(a, b, position=1e-9, tension=1e-8):
+    assert a.converged and b.converged
+    assert np.max(np.abs(a.tip_position - b.tip_position)) < position
+    for key, actuator in a.actuators.items():
+        assert abs(b.actuators[key].tension - actuator.tension) <= tension * max(abs(actuator.tension), 1e-12)
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=[p.stem for p in SHIPPED])
+def test_newton_matches_ipopt_on_a_warm_step(path):
+    sim = Simulation.from_file(path)
+    start = sim.solve()
+    nudge(sim)
+    solver = sim.solver()
+    by_ipopt = solver.solve_ipopt(sim.params, start)
+    by_newton = solver.solve_newton(sim.params, start.raw["w"])
+    assert by_newton.status == "Newton"
+    assert_same(by_ipopt, by_newton)
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=[p.stem for p in SHIPPED])
+def test_newton_algorithm_option_matches_the_default(path):
+    default = Simulation.from_file(path)
+    fast = Simulation.from_file(path, ["solver.algorithm=newton"])
+    assert_same(default.solve(), fast.solve())
+    nudge(default), nudge(fast)
+    warm_default, warm_fast = default.solve(warm_start="last"), fast.solve(warm_start="last")
+    assert warm_fast.status == "Newton" and warm_default.status != "Newton"
+    assert_same(warm_default, warm_fast)
+
+
+def tip_load(force, *options):
+    return Simulation.from_file(SCENARIOS / "analytic" / "tip_load.yaml",
+                                [f"tip_force.force=[{force}, 0, 0]", *options])
+
+
+def test_direct_newton_solve_from_the_straight_rod():
+    """No continuation: Newton alone from the straight rod converges at P L^2/EI = 10."""
+    fast = tip_load(-5e-4, "solver.algorithm=newton", "solver.continuation=never").solve()
+    assert fast.converged and fast.status == "Newton"
+    assert np.max(np.abs(fast.tip_position - tip_load(-5e-4).solve().tip_position)) < 1e-9
+
+
+def test_newton_failure_falls_back_to_ipopt_and_is_reported():
+    """At P L^2/EI = 40 without continuation Newton finds no descent; IPOPT is tried next and
+    its failure is reported, never hidden."""
+    sim = tip_load(-2e-3, "solver.algorithm=newton", "solver.continuation=never")
+    newton = sim.solver().solve_newton(sim.params, sim.solver().initial_guess(sim.params))
+    assert not newton.converged
+    solution = sim.solve()
+    assert solution.status != "Newton"                      # IPOPT's answer
+    if not solution.converged:
+        assert solution.warnings[0].startswith("not converged")
+    assert tip_load(-2e-3).solve().converged               # continuation (the default) gets there
