@@ -311,7 +311,7 @@ class SolverOptions(Strict):
     tolerance: float = Field(default=1e-10, gt=0, lt=1e-2)
     max_iterations: int = Field(default=200, ge=1)
     continuation: Literal["auto", "always", "never"] = "auto"
-    algorithm: Literal["ipopt", "newton"] = "ipopt"
+    algorithm: Literal["ipopt", "newton"] = "newton"
 
 
 # ----------------------------------------------------------------------------- inverse statics

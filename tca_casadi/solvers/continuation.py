@@ -57,11 +57,16 @@ class BranchFollower:
         lam_rate = 1.0 if tangent is None else float(tangent[-1])
         return BranchPoint(lam, solution, w, rate, lam_rate, linear, sign)
 
+    #: IPOPT is tried after a failed Newton step only on steps up to this size (lam); a larger
+    #: failed step is halved first, which is much cheaper
+    IPOPT_STEP = 1.0 / 16
+
     def step(self, current, lam):
-        """Newton from the tangent predictor at ``lam`` (IPOPT, warm-started, if Newton fails)."""
+        """Newton from the tangent predictor at ``lam`` (IPOPT, warm-started, if Newton fails
+        on a small step)."""
         predicted = current.w + (lam - current.lam) * current.w_rate
         trial = self.solver.solve_newton(self.params_at(lam), predicted)
-        if not trial.converged:
+        if not trial.converged and lam - current.lam <= self.IPOPT_STEP + 1e-12:
             trial = self.solver.solve_ipopt(self.params_at(lam), current.solution)
         self.iterations += trial.iterations
         return trial

@@ -38,14 +38,15 @@ def test_newton_matches_ipopt_on_a_warm_step(path):
 
 
 @pytest.mark.parametrize("path", SHIPPED, ids=[p.stem for p in SHIPPED])
-def test_newton_algorithm_option_matches_the_default(path):
-    default = Simulation.from_file(path)
-    fast = Simulation.from_file(path, ["solver.algorithm=newton"])
-    assert_same(default.solve(), fast.solve())
-    nudge(default), nudge(fast)
-    warm_default, warm_fast = default.solve(warm_start="last"), fast.solve(warm_start="last")
-    assert warm_fast.status == "Newton" and warm_default.status != "Newton"
-    assert_same(warm_default, warm_fast)
+def test_newton_algorithm_matches_ipopt_algorithm(path):
+    by_ipopt = Simulation.from_file(path, ["solver.algorithm=ipopt"])
+    fast = Simulation.from_file(path)                      # newton is the default
+    assert fast.scenario.solver.algorithm == "newton"
+    assert_same(by_ipopt.solve(), fast.solve())
+    nudge(by_ipopt), nudge(fast)
+    warm_ipopt, warm_fast = by_ipopt.solve(warm_start="last"), fast.solve(warm_start="last")
+    assert warm_fast.status == "Newton" and warm_ipopt.status != "Newton"
+    assert_same(warm_ipopt, warm_fast)
 
 
 def tip_load(force, *options):
@@ -55,7 +56,7 @@ def tip_load(force, *options):
 
 def test_direct_newton_solve_from_the_straight_rod():
     """No continuation: Newton alone from the straight rod converges at P L^2/EI = 10."""
-    fast = tip_load(-5e-4, "solver.algorithm=newton", "solver.continuation=never").solve()
+    fast = tip_load(-5e-4, "solver.continuation=never").solve()
     assert fast.converged and fast.status == "Newton"
     assert np.max(np.abs(fast.tip_position - tip_load(-5e-4).solve().tip_position)) < 1e-9
 
@@ -63,7 +64,7 @@ def test_direct_newton_solve_from_the_straight_rod():
 def test_newton_failure_falls_back_to_ipopt_and_is_reported():
     """At P L^2/EI = 40 without continuation Newton finds no descent; IPOPT is tried next and
     its failure is reported, never hidden."""
-    sim = tip_load(-2e-3, "solver.algorithm=newton", "solver.continuation=never")
+    sim = tip_load(-2e-3, "solver.continuation=never")
     newton = sim.solver().solve_newton(sim.params, sim.solver().initial_guess(sim.params))
     assert not newton.converged
     solution = sim.solve()

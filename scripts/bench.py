@@ -1,0 +1,195 @@
+"""Speed and accuracy benchmark: collocation (IPOPT and the Newton fast path) against the
+shooting solver, measured in the same run.
+
+    python scripts/bench.py                 # full run (a few minutes), writes results/bench.json
+    python scripts/bench.py --quick         # smoke run: 1 repeat, fewer problems and steps
+
+For each problem it reports the median over repeats of: the NLP build; a cold solve
+(continuation from the reference state); a warm re-solve after +1 degC on every TCA (+1 % load
+where there is no TCA), by IPOPT and by Newton; a 101-step sweep 25 -> 125 degC (the load from
+0 to its value where there is no TCA); an inverse query (full-space IPOPT and reduced, targets
+from forward solves at random temperatures); the shooting solver's cold solve; the tip error of
+each against a reference on a much finer mesh (64 intervals, degree 5); and the cold
+collocation time on the coarsest mesh at least as accurate as shooting (the speed ratio at
+equal accuracy).
+"""
+import argparse
+import json
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from tca_casadi import InverseStatics, Simulation, Sweep, Target  # noqa: E402
+
+SCENARIOS = ROOT / "scenarios"
+
+
+def arm_source():
+    """scenarios/arm.yaml when shipped, else the bending module with the twisting module below."""
+    if (SCENARIOS / "arm.yaml").exists():
+        return SCENARIOS / "arm.yaml"
+    bending, twisting = (yaml.safe_load((SCENARIOS / f"{n}.yaml").read_text())
+                         for n in ("bending_module", "twisting_module"))
+    raw = dict(bending, name="arm_bending_twisting", loads=[], modules=bending["modules"] + twisting["modules"])
+    raw.pop("inverse", None)
+    raw["solver"] = {"intervals": "auto", "degree": 4}
+    return raw
+
+
+PROBLEMS = {
+    "bending_module": lambda: SCENARIOS / "bending_module.yaml",
+    "twisting_module": lambda: SCENARIOS / "twisting_module.yaml",
+    "arm": arm_source,
+    "elastica": lambda: SCENARIOS / "analytic" / "tip_load.yaml",
+}
+
+
+def median_time(function, repeats):
+    """(median seconds, last result) of ``repeats`` calls."""
+    times, result = [], None
+    for _ in range(repeats):
+        start = time.perf_counter()
+        result = function()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times), result
+
+
+def nudge(sim, params):
+    """+1 degC on every TCA, +1 % on every load/tension."""
+    out = params.copy()
+    for name in sim.robot.layout.names():
+        slot = sim.robot.layout[name]
+        if name.endswith(".temperature"):
+            out[slot] += 1.0
+        elif name.endswith((".tension", ".force", ".moment", ".mass")):
+            out[slot] *= 1.01
+    return out
+
+
+def sweep_paths(sim):
+    tcas = [a.parameter for a in sim.robot.tcas]
+    if tcas:
+        return tcas, 25.0, 125.0
+    name = next(n for n in sim.robot.layout.names() if n.endswith(".force"))
+    component = int(np.argmax(np.abs(sim.get_parameter(name))))
+    return [f"{name}[{component}]"], 0.0, float(sim.get_parameter(name)[component])
+
+
+def bench_problem(name, source, repeats, steps, shooting_repeats, inverse_queries):
+    row = {"problem": name}
+    row["build_s"], sim = median_time(lambda: _built(source), repeats)
+    solver = sim.solver()
+    row["unknowns"] = int(solver.nlp.w.numel())
+    row["cold_s"], cold = median_time(lambda: sim.solve(), repeats)
+    row["cold_converged"] = bool(cold.converged)
+    nudged = nudge(sim, sim.params)
+    row["warm_ipopt_s"], warm = median_time(lambda: solver.solve_ipopt(nudged, cold), max(repeats, 5))
+    row["warm_newton_s"], fast = median_time(lambda: solver.solve_newton(nudged, cold.raw["w"]), max(repeats, 5))
+    row["warm_newton_equals_ipopt_m"] = float(np.max(np.abs(fast.tip_position - warm.tip_position)))
+    paths, start, stop = sweep_paths(sim)
+    row["sweep_steps"] = steps
+    row["sweep_s"], sweep = median_time(lambda: Sweep(sim, paths, start, stop, steps=steps).run(), repeats)
+    row["sweep_completed"] = bool(sweep.completed)
+    reference = Simulation.from_file(source, ["solver.intervals=64", "solver.degree=5"]).solve()
+    row["tip_error_collocation_m"] = float(np.linalg.norm(cold.tip_position - reference.tip_position))
+    if sim.robot.tcas and inverse_queries:
+        row.update(bench_inverse(sim, inverse_queries))
+    if shooting_repeats:
+        row["shooting_s"], shot = median_time(lambda: sim.solve(method="shooting"), shooting_repeats)
+        row["tip_error_shooting_m"] = float(np.linalg.norm(shot.tip_position - reference.tip_position))
+        row["speedup_cold"] = row["shooting_s"] / row["cold_s"]
+        row.update(equal_accuracy(source, reference, row["tip_error_shooting_m"], repeats))
+        row["speedup_equal_accuracy"] = row["shooting_s"] / row["cold_equal_accuracy_s"]
+    return row
+
+
+def equal_accuracy(source, reference, shooting_error, repeats):
+    """Cold collocation time on the coarsest mesh at least as accurate as shooting (tip error
+    at most max(shooting's, 1e-12) m against the fine reference; 1e-12 is the floor the
+    reference itself and the solver tolerance allow)."""
+    threshold = max(shooting_error, 1e-12)
+    for intervals in (4, 6, 8, 12, 16, 24, 32, 48):
+        sim = Simulation.from_file(source, [f"solver.intervals={intervals}"])
+        solution = sim.solve()
+        error = float(np.linalg.norm(solution.tip_position - reference.tip_position))
+        if error <= threshold:
+            break
+    seconds, _ = median_time(lambda: sim.solve(), repeats)
+    return {"intervals_equal_accuracy": intervals, "tip_error_equal_accuracy_m": error,
+            "cold_equal_accuracy_s": seconds}
+
+
+def _built(source):
+    sim = Simulation.from_file(source)
+    sim.solver()
+    return sim
+
+
+def bench_inverse(sim, queries):
+    """Median time of cold inverse queries (targets: forward tips at random temperatures in
+    25-125 degC, seed 0), per method; the first query (which also solves the cached start
+    equilibria) is reported separately."""
+    paths = [a.parameter for a in sim.robot.tcas]
+    forward, rng, targets = Simulation.from_file(sim.scenario.model_dump(mode="json")), np.random.default_rng(0), []
+    for _ in range(queries + 1):
+        for path, value in zip(paths, rng.uniform(25, 125, len(paths))):
+            forward.set_parameter(path, value)
+        targets.append(Target.create(forward.solve().tip_position))
+    out = {}
+    for method in ("ipopt", "reduced"):
+        inverse = InverseStatics(sim, bounds=(25, 125), method=method)
+        results = [inverse.solve(t) for t in targets]
+        out[f"inverse_{method}_first_s"] = results[0].solve_time_s
+        out[f"inverse_{method}_s"] = statistics.median(r.solve_time_s for r in results[1:])
+        out[f"inverse_{method}_reached"] = f"{sum(r.reachable for r in results)}/{len(results)}"
+    return out
+
+
+COLUMNS = [("problem", "{}"), ("unknowns", "{}"), ("build_s", "{:.3f}"), ("cold_s", "{:.4f}"),
+           ("warm_ipopt_s", "{:.4f}"), ("warm_newton_s", "{:.4f}"), ("sweep_s", "{:.3f}"),
+           ("inverse_ipopt_s", "{:.3f}"), ("inverse_reduced_s", "{:.3f}"), ("shooting_s", "{:.3f}"),
+           ("speedup_cold", "{:.0f}x"), ("tip_error_collocation_m", "{:.1e}"),
+           ("tip_error_shooting_m", "{:.1e}"), ("intervals_equal_accuracy", "{}"),
+           ("tip_error_equal_accuracy_m", "{:.1e}"), ("speedup_equal_accuracy", "{:.0f}x")]
+
+
+def table(rows):
+    header = [name for name, _ in COLUMNS]
+    lines = [" | ".join(header), " | ".join("---" for _ in header)]
+    for row in rows:
+        lines.append(" | ".join(fmt.format(row[name]) if name in row else "-" for name, fmt in COLUMNS))
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description="tca_casadi speed and accuracy benchmark")
+    parser.add_argument("--quick", action="store_true", help="smoke run: 1 repeat, bending module and elastica")
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("-o", "--output", type=Path, default=ROOT / "results" / "bench.json")
+    args = parser.parse_args(argv)
+    if args.quick:
+        plan = {"bending_module": (1, 11, 1, 2), "elastica": (1, 11, 1, 0)}
+    else:
+        r = args.repeats
+        plan = {"bending_module": (r, 101, r, 10), "twisting_module": (r, 101, 1, 10),
+                "arm": (max(1, r // 2), 101, 1, 5), "elastica": (r, 101, r, 0)}
+    rows = []
+    for name, (repeats, steps, shooting_repeats, queries) in plan.items():
+        print(f"benchmarking {name} ...", file=sys.stderr, flush=True)
+        rows.append(bench_problem(name, PROBLEMS[name](), repeats, steps, shooting_repeats, queries))
+    print(table(rows))
+    args.output.parent.mkdir(parents=True, exist_ok=True)
+    args.output.write_text(json.dumps({"quick": args.quick, "rows": rows}, indent=2))
+    print(f"wrote {args.output}")
+    return rows
+
+
+if __name__ == "__main__":
+    main()

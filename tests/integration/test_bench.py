@@ -1,0 +1,20 @@
+"""scripts/bench.py runs (quick mode) and reports what the README's performance table shows."""
+import sys
+
+from conftest import ROOT
+
+sys.path.insert(0, str(ROOT / "scripts"))
+
+
+def test_bench_quick_smoke(tmp_path, capsys):
+    from bench import main
+    rows = main(["--quick", "-o", str(tmp_path / "bench.json")])
+    assert (tmp_path / "bench.json").exists()
+    by_name = {row["problem"]: row for row in rows}
+    bending = by_name["bending_module"]
+    assert bending["cold_converged"] and bending["sweep_completed"]
+    assert bending["warm_newton_equals_ipopt_m"] < 1e-9          # the fast path is the same answer
+    assert bending["tip_error_collocation_m"] < 1e-6              # the default mesh's accuracy
+    assert bending["tip_error_shooting_m"] < 1e-6
+    assert bending["inverse_reduced_reached"] == "3/3" and bending["inverse_ipopt_reached"] == "3/3"
+    assert "speedup_cold" in bending and "problem | unknowns" in capsys.readouterr().out
