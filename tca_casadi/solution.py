@@ -51,6 +51,10 @@ class ActuatorResult:
     reference_length: float
     free_stroke: Optional[float]
     path: np.ndarray
+    control: str = "temperature"          # temperature (TCA) | tension | displacement (tendon)
+    tension_only: bool = False
+    displacement: Optional[float] = None  # q [m], displacement-controlled tendons
+    slack_length: Optional[float] = None  # [m] tension_only actuators (0 when taut)
 
     @property
     def stroke(self):
@@ -60,10 +64,16 @@ class ActuatorResult:
     def heated(self):
         return self.kind == "tca" and self.temperature > self.reference_temperature + 0.5
 
+    @property
+    def slack(self):
+        return bool(self.slack_length)
+
     def as_dict(self):
-        return {"kind": self.kind, "temperature": self.temperature, "tension": self.tension,
+        return {"kind": self.kind, "control": self.control, "temperature": self.temperature,
+                "displacement": self.displacement, "tension": self.tension,
                 "length": self.length, "reference_length": self.reference_length,
-                "stroke": self.stroke, "free_stroke": self.free_stroke}
+                "stroke": self.stroke, "free_stroke": self.free_stroke,
+                "tension_only": self.tension_only, "slack_length": self.slack_length}
 
 
 @dataclass
@@ -160,11 +170,14 @@ class Solution:
                  f"residual {self.max_residual:.1e}, solve {self.solve_time_s * 1e3:.1f} ms, "
                  f"build {self.build_time_s * 1e3:.0f} ms)",
                  f"  tip position [mm]: {tip[0]:+.4f} {tip[1]:+.4f} {tip[2]:+.4f}",
-                 f"  {'actuator':<22}{'T [degC]':>9}{'F [mN]':>10}{'stroke [mm]':>13}{'free [mm]':>11}"]
+                 f"  {'actuator':<22}{'T [degC]':>9}{'q [mm]':>8}{'F [mN]':>11}{'stroke [mm]':>13}"
+                 f"{'free [mm]':>11}{'slack [mm]':>12}"]
         for key, a in self.actuators.items():
             temp = f"{a.temperature:9.1f}" if a.temperature is not None else f"{'-':>9}"
+            pull = f"{a.displacement * 1e3:8.3f}" if a.displacement is not None else f"{'-':>8}"
             free = f"{a.free_stroke * 1e3:11.4f}" if a.free_stroke is not None else f"{'-':>11}"
-            lines.append(f"  {key:<22}{temp}{a.tension * 1e3:10.4f}{a.stroke * 1e3:13.4f}{free}")
+            slack = f"{a.slack_length * 1e3:12.4f}" if a.slack_length is not None else f"{'-':>12}"
+            lines.append(f"  {key:<22}{temp}{pull}{a.tension * 1e3:11.4f}{a.stroke * 1e3:13.4f}{free}{slack}")
         lines += [f"  warning: {w}" for w in self.warnings]
         if not self.converged:
             lines.append(f"  message: {self.message}")

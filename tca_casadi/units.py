@@ -25,6 +25,7 @@ KINDS = {
     "curvature": ("1/m", "a curvature"),
     "temperature": ("degC", "a temperature"),
     "pressure_per_force": ("Pa/N", "a modulus per force"),
+    "compliance": ("1/N", "a compliance (strain per newton)"),
     "pressure_per_force2": ("Pa/N^2", "a modulus per force squared"),
     "dimensionless": ("", "a plain number"),
 }

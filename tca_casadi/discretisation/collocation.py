@@ -8,7 +8,8 @@ Variables ``w`` (scaled: the physical value is ``scale * w``):
        ``[p (3), h (4), (u - u*) (3), (v - v*) (3)]``, scaled by ``[L, 1, F_s L / K_bt, F_s / K_se]``
        (``F_s = EI / L^2``: the strains become order-one internal moments and forces);
     2. for each module, the partial length of each of its actuators over each interval [/L];
-    3. the TCA tensions [/F_s], in ``robot.tcas`` order.
+    3. the unknown tensions [/F_s] (TCAs and displacement-controlled tendons), in
+       ``robot.unknowns`` order.
 Parameters ``P``: the robot's parameter vector (``robot.layout``): gravity, base pose,
     temperatures, tendon tensions, load forces/moments/masses.
 Constraints ``g`` (equalities, each scaled to order one), per module in order:
@@ -17,7 +18,8 @@ Constraints ``g`` (equalities, each scaled to order one), per module in order:
     ``|a|`` over each interval); at the interior breakpoints, continuity of p and h and the wrench
     jump ``K (xi+ - xi-) + point wrenches = 0``; at the module's end, the junction link to the next
     module (pose through the connector, wrench balance) or, for the last module, the tip wrench.
-    Last, one compatibility equation per TCA (its law, multiplied through by ``G_t(F)``).
+    Last, one compatibility equation per unknown tension (a TCA's law multiplied through by
+    ``G_t(F)``, a tendon's length condition; Fischer-Burmeister for ``tension_only``).
 The forward problem is square: ``len(w) == len(g)``.
 """
 import casadi as ca
@@ -25,6 +27,7 @@ import numpy as np
 
 from ..model import boundary
 from ..model.boundary import add as _add
+from ..model.compatibility import compatibility
 from ..model.rod import STATE_SIZE, rod_equations
 from .mesh import CollocationScheme, build_mesh
 
@@ -91,10 +94,10 @@ class CollocationNLP:
             scales.append(np.full(count, module.length))
             self.partial_index.append(offset + np.arange(count))
             offset += count
-        tcas = self.robot.tcas
-        blocks.append(ca.MX.sym("F", len(tcas)))
-        scales.append(np.array([self.robot.modules[a.module].force_scale for a in tcas]))
-        self.tension_index = offset + np.arange(len(tcas))
+        unknowns = self.robot.unknowns
+        blocks.append(ca.MX.sym("F", len(unknowns)))
+        scales.append(np.array([self.robot.modules[a.module].force_scale for a in unknowns]))
+        self.tension_index = offset + np.arange(len(unknowns))
         self.w = ca.vertcat(*blocks)
         self.scale = np.concatenate(scales)
         # deviation states [p, h, u - u*, v - v*] in SI units, per interval (13, d+1)
@@ -102,12 +105,12 @@ class CollocationNLP:
         for m, block in enumerate(blocks[:len(self.meshes)]):
             matrix = ca.reshape(block, STATE_SIZE, -1)
             self._states.append(ca.diag(ca.DM(self.node_scale[m])) @ matrix)
-        self._tensions = blocks[-1] * ca.DM(scales[-1]) if len(tcas) else ca.MX(0, 1)
+        self._tensions = blocks[-1] * ca.DM(scales[-1]) if len(unknowns) else ca.MX(0, 1)
 
     def tension_of(self, actuator):
-        """Symbolic tension [N] of an actuator: a variable for a TCA, a parameter for a tendon."""
-        if actuator.kind == "tca":
-            return self._tensions[self.robot.tcas.index(actuator)]
+        """Symbolic tension [N] of an actuator: a variable when unknown, else a parameter."""
+        if actuator.unknown_tension:
+            return self._tensions[self.robot.unknowns.index(actuator)]
         return self.P[self.robot.layout[actuator.parameter]][0]
 
     def param(self, name):
@@ -247,12 +250,12 @@ class CollocationNLP:
 
     # ------------------------------------------------------------------ TCA law
     def _compatibility(self):
-        for actuator in self.robot.tcas:
+        for actuator in self.robot.unknowns:
             position = self.robot.actuators.index(actuator)
             stroke = self._lengths[position] - actuator.reference_length
-            law = actuator.law
-            residual = law.residual(stroke, self.tension_of(actuator), self.param(actuator.parameter)[0])
-            self._g.append(residual / law.residual_scale)
+            self._g.append(compatibility(actuator, stroke, self.tension_of(actuator),
+                                         self.param(actuator.parameter)[0],
+                                         self.robot.modules[actuator.module].force_scale))
 
     # ------------------------------------------------------------------ helpers for solvers
     def node_s(self, m):

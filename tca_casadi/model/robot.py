@@ -13,23 +13,33 @@ from scipy.integrate import simpson
 from ..scenario.checks import fail, route_span
 from .routes import make_route
 from .sections import outline_contains, section_properties, stiffness_diagonal
+from .compatibility import TendonLaw
 from .tca_law import TcaLaw
 
 
 @dataclass
 class ActuatorModel:
-    """One actuator. ``kind`` is ``"tca"`` (tension unknown) or ``"tendon"`` (tension given)."""
+    """One actuator. ``kind`` is ``"tca"`` (tension unknown, fixed by its law) or ``"tendon"``;
+    a tendon's ``control`` is ``"tension"`` (given) or ``"displacement"`` (tension unknown, fixed
+    by its length condition). ``tension_only``: may go slack (F = 0)."""
     name: str
     module: int
     kind: str
     route: object
-    law: Optional[TcaLaw]
+    law: Optional[object]     # TcaLaw, TendonLaw (displacement control) or None
     reference_length: float
-    parameter: str            # 'MODULE.NAME.temperature' or 'MODULE.NAME.tension'
+    parameter: str            # 'MODULE.NAME.temperature' | '.tension' | '.displacement'
+    control: str = "temperature"
+    tension_only: bool = False
 
     @property
     def key(self):
         return self.parameter.rsplit(".", 1)[0]
+
+    @property
+    def unknown_tension(self):
+        """True when the tension is an unknown of the problem (TCAs, displacement tendons)."""
+        return self.control != "tension"
 
 
 @dataclass
@@ -117,6 +127,12 @@ class Robot:
         self.name = name
 
     @property
+    def unknowns(self):
+        """Actuators whose tension is unknown (TCAs and displacement-controlled tendons), in
+        order: the solvers' tension unknowns and compatibility equations."""
+        return [a for a in self.actuators if a.unknown_tension]
+
+    @property
     def tcas(self):
         """Actuators whose tension is an unknown, in the order of the NLP's tension variables."""
         return [a for a in self.actuators if a.kind == "tca"]
@@ -148,6 +164,7 @@ class Robot:
         for actuator in self.actuators:
             slot = self.layout[actuator.parameter]
             rest[slot] = actuator.law.reference_temperature if actuator.kind == "tca" else 0.0
+            # a displacement tendon at q = 0 is exactly taut with no tension: the reference state
         for name in self.layout.names():
             if name.endswith((".force", ".moment", ".mass")):
                 rest[self.layout[name]] = 0.0
@@ -189,13 +206,18 @@ def _actuator(scenario, index, config, a_index, a_config):
     _check_inside(scenario, index, config, a_index, route)
     xi_star = np.array(list(config.precurvature) + [0.0, 0.0, 1.0])
     reference_length = reference_path_length(route, xi_star)
-    law = None
+    law, control = None, "temperature"
     if a_config.kind == "tca":
         law = TcaLaw.from_type(scenario.tca_types[a_config.type], reference_length)
-        parameter = f"{config.name}.{a_config.name}.temperature"
     else:
-        parameter = f"{config.name}.{a_config.name}.tension"
-    return ActuatorModel(a_config.name, index, a_config.kind, route, law, reference_length, parameter)
+        control = a_config.control
+        if control == "displacement":
+            compliance = a_config.compliance if a_config.compliance is not None else (
+                1.0 / a_config.stiffness if a_config.stiffness is not None else 0.0)
+            law = TendonLaw(reference_length, compliance)
+    parameter = f"{config.name}.{a_config.name}.{control}"
+    return ActuatorModel(a_config.name, index, a_config.kind, route, law, reference_length, parameter,
+                         control, bool(a_config.tension_only))
 
 
 def reference_path_length(route, xi_star, points=4001):
@@ -258,7 +280,7 @@ def _parameters(scenario, actuators, point_loads, distributed):
     configs = {(m.name, a.name): a for m in scenario.modules for a in m.actuators}
     for actuator in actuators:
         config = configs[(scenario.modules[actuator.module].name, actuator.name)]
-        put(actuator.parameter, config.temperature if actuator.kind == "tca" else config.tension)
+        put(actuator.parameter, getattr(config, actuator.control))
     loads = {load.name: load for load in scenario.loads}
     for load in point_loads + distributed:
         config = loads[load.name]

@@ -230,14 +230,34 @@ class Tca(Strict):
     type: str
     route: Route
     temperature: Temperature = 25.0
+    tension_only: bool = False
 
 
 class Tendon(Strict):
-    """A tendon with prescribed ``tension`` [N]."""
+    """A tendon: ``control: tension`` (a given ``tension`` [N]) or ``control: displacement``
+    (pulled by ``displacement`` [m] at its proximal end; tension unknown; optional
+    ``compliance`` [1/N] or axial ``stiffness`` [N]; ``tension_only``: may go slack)."""
     name: str = Field(min_length=1)
     kind: Literal["tendon"]
     route: Route
+    control: Literal["tension", "displacement"] = "tension"
     tension: Force = 0.0
+    displacement: Length = 0.0
+    compliance: Optional[Annotated[float, _quantity("compliance"), Field(ge=0)]] = None
+    stiffness: Optional[Annotated[float, _quantity("force"), Field(gt=0)]] = None
+    tension_only: bool = False
+
+    @model_validator(mode="after")
+    def _control_keys(self):
+        if self.control == "tension" and (self.displacement != 0 or self.tension_only or
+                                          self.compliance is not None or self.stiffness is not None):
+            raise ValueError("displacement, compliance, stiffness and tension_only need "
+                             "control: displacement (a given tension cannot go slack)")
+        if self.control == "displacement" and self.tension != 0:
+            raise ValueError("a displacement-controlled tendon's tension is unknown: remove 'tension'")
+        if self.compliance is not None and self.stiffness is not None:
+            raise ValueError("give compliance or stiffness, not both")
+        return self
 
 
 Actuator = Annotated[Union[Tca, Tendon], Field(discriminator="kind")]

@@ -2,6 +2,7 @@
 Shared by every solver so that all report the same quantities the same way."""
 import numpy as np
 
+from ..model.compatibility import slack_length
 from ..model.rotations import ROTATION
 from ..solution import ActuatorResult, ModuleResult, Solution
 
@@ -33,28 +34,39 @@ def section_outline(section, points=48):
     return np.array([[-w, w, w, -w, -w], [-h, -h, h, h, -h], [0, 0, 0, 0, 0]], dtype=float)
 
 
-def actuator_result(actuator, module_res, tension, length, temperature):
-    """:class:`ActuatorResult`: the path ``p + R r`` over the actuator's span."""
+def actuator_result(actuator, module_res, tension, length, parameter):
+    """:class:`ActuatorResult`: the path ``p + R r`` over the actuator's span; ``parameter`` is
+    the actuator's temperature, tension or displacement."""
     s_a, s_b = actuator.route.span
     tol = 1e-12 * max(1.0, s_b)
     inside = (module_res.s >= s_a - tol) & (module_res.s <= s_b + tol)
     r = actuator.route.evaluate(np.clip(module_res.s[inside], s_a, s_b))[0]
     path = module_res.p[:, inside] + np.einsum("ijk,jk->ik", module_res.R[:, :, inside], r)
-    law = actuator.law
+    is_tca = actuator.kind == "tca"
+    law = actuator.law if is_tca else None
+    stroke = float(length) - actuator.reference_length
     return ActuatorResult(
         key=actuator.key, kind=actuator.kind,
-        temperature=float(temperature) if law is not None else None,
-        reference_temperature=law.reference_temperature if law is not None else None,
+        temperature=float(parameter) if is_tca else None,
+        reference_temperature=law.reference_temperature if is_tca else None,
         tension=float(tension), length=float(length), reference_length=actuator.reference_length,
-        free_stroke=float(law.free_stroke(temperature)) if law is not None else None, path=path)
+        free_stroke=float(law.free_stroke(parameter)) if is_tca else None, path=path,
+        control=actuator.control, tension_only=actuator.tension_only,
+        displacement=float(parameter) if actuator.control == "displacement" else None,
+        slack_length=slack_length(actuator, stroke, float(tension), float(parameter)))
 
 
 def physics_warnings(robot, actuators):
-    """Warnings for TCAs in compression or beyond the fitted law's monotone range."""
+    """Warnings for TCAs in compression or beyond the fitted law's monotone range, and for
+    slack actuators."""
     out = []
-    for actuator in robot.tcas:
+    for actuator in robot.unknowns:
         result = actuators[actuator.key]
-        if result.tension < -COMPRESSION_TOLERANCE:
+        if result.slack_length:
+            out.append(f"{actuator.key} is slack (F = 0; slack length {result.slack_length * 1e3:.4g} mm)")
+        if actuator.kind != "tca":
+            continue
+        if result.tension < -COMPRESSION_TOLERANCE and not actuator.tension_only:
             out.append(f"{actuator.key} is in compression (F = {result.tension * 1e3:.4g} mN): "
                        "a real TCA would buckle or go slack; the law's extension G_t(0) "
                        "exp(F G_t'(0)/G_t(0)) was used")
@@ -72,9 +84,9 @@ def build_solution(robot, params, module_data, tensions, lengths, status):
     modules = [module_result(robot.modules[m], *data) for m, data in enumerate(module_data)]
     actuators = {}
     for k, actuator in enumerate(robot.actuators):
-        temperature = params[robot.layout[actuator.parameter]][0] if actuator.kind == "tca" else None
+        parameter = params[robot.layout[actuator.parameter]][0]
         actuators[actuator.key] = actuator_result(actuator, modules[actuator.module], tensions[k],
-                                                  lengths[k], temperature)
+                                                  lengths[k], parameter)
     warnings = physics_warnings(robot, actuators)
     if not status["converged"]:
         warnings.insert(0, f"not converged: {status['message']}")

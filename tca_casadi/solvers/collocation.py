@@ -126,8 +126,8 @@ class CollocationSolver:
             module_data.append((s, states, base[:, m]))
         tensions = []
         for actuator in self.robot.actuators:
-            if actuator.kind == "tca":
-                tensions.append(w_phys[nlp.tension_index[self.robot.tcas.index(actuator)]])
+            if actuator.unknown_tension:
+                tensions.append(w_phys[nlp.tension_index[self.robot.unknowns.index(actuator)]])
             else:
                 tensions.append(params[self.robot.layout[actuator.parameter]][0])
         return build_solution(self.robot, params, module_data, tensions, lengths.ravel(), status)

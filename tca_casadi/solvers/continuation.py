@@ -5,7 +5,9 @@ Newton on the square system, falling back to IPOPT (warm-started) when Newton fa
 end is inconsistent with the trapezoidal rule on the branch's tangents (more than
 ``jump_tolerance``: a jump to another branch, as seen on buckling problems when a step spans the
 critical load), or where the sign of ``det J_w`` differs (the Jacobian is singular somewhere
-between: a fold or a bifurcation), counts as a failed step and is halved.
+between: a fold or a bifurcation), counts as a failed step and is halved. The trapezoid test is
+skipped on a step where a tension-only actuator goes slack or taut: the branch has a corner
+there.
 Used by cold starts (from the unloaded reference state) and by sweeps.
 """
 from dataclasses import dataclass, field
@@ -95,7 +97,10 @@ class BranchFollower:
             jump, crossed = np.inf, False
             if trial.converged:
                 candidate = self.point(lam, trial)
-                jump = self.inconsistency(current, candidate)
+                # where a tension-only actuator goes slack or taut the branch has a corner: the
+                # tangents on its two sides differ, so the trapezoid test does not apply
+                corner = _slack_pattern(current.solution) != _slack_pattern(trial)
+                jump = 0.0 if corner else self.inconsistency(current, candidate)
                 crossed = candidate.det_sign * current.det_sign < 0
                 if jump <= self.jump_tolerance and not crossed:
                     current, substeps = candidate, substeps + 1
@@ -105,3 +110,7 @@ class BranchFollower:
             if step < min_step:
                 return current, step, substeps, StepFailure(trial, jump, crossed)
         return current, step, substeps, None
+
+
+def _slack_pattern(solution):
+    return tuple(a.slack for a in solution.actuators.values() if a.tension_only)

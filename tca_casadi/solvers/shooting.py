@@ -19,6 +19,7 @@ from scipy.optimize import root
 
 from ..discretisation.mesh import module_breakpoints
 from ..model import boundary
+from ..model.compatibility import compatibility
 from ..model.rod import STATE_SIZE, explicit_strain_rate, rod_equations
 from .assemble import build_solution
 
@@ -57,16 +58,16 @@ class ShootingSolver:
         first = self.robot.modules[0]
         strain = np.r_[first.force_scale * first.length / first.stiffness[0:3],
                        first.force_scale / first.stiffness[3:6]]
-        tensions = [self.robot.modules[a.module].force_scale for a in self.robot.tcas]
+        tensions = [self.robot.modules[a.module].force_scale for a in self.robot.unknowns]
         return np.r_[strain, tensions]
 
     def initial_guess(self, initial=None):
         """Scaled unknowns from a previous Solution (any method), else the reference state."""
-        z = np.zeros(6 + len(self.robot.tcas))
+        z = np.zeros(6 + len(self.robot.unknowns))
         if initial is not None:
             first, module = initial.modules[0], self.robot.modules[0]
             z[:6] = np.r_[first.u[:, 0], first.v[:, 0]] - module.xi_star
-            z[6:] = [initial.actuators[a.key].tension for a in self.robot.tcas]
+            z[6:] = [initial.actuators[a.key].tension for a in self.robot.unknowns]
         return z / self._unknown_scale()
 
     # ------------------------------------------------------------------ solve
@@ -136,7 +137,7 @@ class ShootingSolver:
         """Integrate the whole chain from unknowns z; return (residuals, trajectory)."""
         robot = self.robot
         unknowns = z * self._unknown_scale()
-        tensions = dict(zip([a.key for a in robot.tcas], unknowns[6:]))
+        tensions = dict(zip([a.key for a in robot.unknowns], unknowns[6:]))
         tension = _tension_lookup(robot, params, tensions)
         param = _param_lookup(robot, params)
         state = np.r_[params[robot.layout["base.position"]], params[robot.layout["base.quaternion"]],
@@ -157,11 +158,11 @@ class ShootingSolver:
                 residuals.append(tip * _wrench_scale(module))
             else:
                 state = self._junction(m, end, applied, tension, param)
-        for actuator in robot.tcas:
-            law = actuator.law
+        for actuator in robot.unknowns:
             stroke = lengths[robot.actuators.index(actuator)] - actuator.reference_length
-            temperature = params[robot.layout[actuator.parameter]][0]
-            residuals.append([law.residual(stroke, tensions[actuator.key], temperature) / law.residual_scale])
+            parameter = params[robot.layout[actuator.parameter]][0]
+            residuals.append([compatibility(actuator, stroke, tensions[actuator.key], parameter,
+                                            robot.modules[actuator.module].force_scale)])
         all_tensions = [tension(a) for a in robot.actuators]
         return np.concatenate([np.ravel(r) for r in residuals]), (module_data, all_tensions, lengths)
 
@@ -324,10 +325,10 @@ def _wrench_scale(module):
     return np.r_[np.full(3, 1 / (module.force_scale * module.length)), np.full(3, 1 / module.force_scale)]
 
 
-def _tension_lookup(robot, params, tca_tensions):
+def _tension_lookup(robot, params, unknown_tensions):
     def tension(actuator):
-        if actuator.kind == "tca":
-            return tca_tensions[actuator.key]
+        if actuator.unknown_tension:
+            return unknown_tensions[actuator.key]
         return float(params[robot.layout[actuator.parameter]][0])
     return tension
 

@@ -11,10 +11,13 @@ import numpy as np
 
 from ..model.rotations import rotation_angle
 
-#: default agreement tolerances: tip and centerline [m], tensions (relative, floor 1e-9 N)
+#: default agreement tolerances: tip, centerline and slack lengths [m]; tensions relative to
+#: the larger of the two, floored at 1e-6 of the robot's largest tension (and 1e-9 N), so that
+#: a slack actuator's ~1e-12 N is compared absolutely, not relatively
 POSITION_TOLERANCE = 1e-6
 TENSION_TOLERANCE = 1e-5
 TENSION_FLOOR = 1e-9
+TENSION_FLOOR_FRACTION = 1e-6
 
 
 @dataclass
@@ -27,6 +30,7 @@ class CheckReport:
     tip_rotation_difference: float
     max_centerline_distance: float
     tension_differences: dict = field(default_factory=dict)
+    slack_differences: dict = field(default_factory=dict)
     solve_times_s: dict = field(default_factory=dict)
     position_tolerance: float = POSITION_TOLERANCE
     tension_tolerance: float = TENSION_TOLERANCE
@@ -41,7 +45,8 @@ class CheckReport:
         return (all(self.converged.values())
                 and self.tip_position_difference <= self.position_tolerance
                 and self.max_centerline_distance <= self.position_tolerance
-                and self.worst_relative_tension <= self.tension_tolerance)
+                and self.worst_relative_tension <= self.tension_tolerance
+                and max(self.slack_differences.values(), default=0.0) <= self.position_tolerance)
 
     def to_dict(self):
         data = asdict(self)
@@ -65,6 +70,8 @@ class CheckReport:
         for key, d in self.tension_differences.items():
             lines.append(f"  {key:<24} {d[a] * 1e3:+.6f} mN vs {d[b] * 1e3:+.6f} mN  "
                          f"(relative {d['relative']:.2e})")
+        for key, d in self.slack_differences.items():
+            lines.append(f"  {key:<24} slack length difference {d:.3e} m")
         lines.append("  solve time: " + ", ".join(f"{k} {v:.3f} s" for k, v in self.solve_times_s.items()))
         return "\n".join(lines)
 
@@ -76,17 +83,22 @@ def compare_solutions(first, second, position_tolerance=POSITION_TOLERANCE,
     distance = 0.0
     for ma, mb in zip(first.modules, second.modules):
         distance = max(distance, _centerline_distance(ma, mb))
-    tensions = {}
+    tensions, slack = {}, {}
+    largest = max((abs(x.tension) for x in first.actuators.values()), default=0.0)
+    floor = max(TENSION_FLOOR, TENSION_FLOOR_FRACTION * largest)
     for key, actuator in first.actuators.items():
-        ta, tb = actuator.tension, second.actuators[key].tension
+        other = second.actuators[key]
+        ta, tb = actuator.tension, other.tension
         tensions[key] = {a: ta, b: tb, "absolute": abs(ta - tb),
-                         "relative": abs(ta - tb) / max(abs(ta), abs(tb), TENSION_FLOOR)}
+                         "relative": abs(ta - tb) / max(abs(ta), abs(tb), floor)}
+        if actuator.slack_length is not None:
+            slack[key] = abs(actuator.slack_length - other.slack_length)
     return CheckReport(
         scenario=first.scenario_name, methods=(a, b),
         converged={a: bool(first.converged), b: bool(second.converged)},
         tip_position_difference=float(np.linalg.norm(first.tip_position - second.tip_position)),
         tip_rotation_difference=rotation_angle(first.tip_rotation, second.tip_rotation),
-        max_centerline_distance=distance, tension_differences=tensions,
+        max_centerline_distance=distance, tension_differences=tensions, slack_differences=slack,
         solve_times_s={a: first.solve_time_s, b: second.solve_time_s},
         position_tolerance=position_tolerance, tension_tolerance=tension_tolerance)
 

@@ -6,6 +6,7 @@ vector entry, or its magnitude:
 
     bending.tca2.temperature     a TCA temperature [degC]
     cable.tension / MOD.TENDON.tension   a tendon tension [N]
+    MOD.TENDON.displacement      a displacement-controlled tendon's pull q [m]
     payload.force.x  (or .y, .z, [0], [1], [2])   one component [N]
     gravity.magnitude            the length of a vector, its direction kept [m/s^2]
 """
@@ -18,7 +19,7 @@ from ..scenario.checks import closest
 from ..units import to_si
 
 #: last word of a layout name -> unit kind (for values given with units and CSV headers)
-KIND_OF = {"temperature": "temperature", "tension": "force", "force": "force", "moment": "moment",
+KIND_OF = {"temperature": "temperature", "tension": "force", "displacement": "length", "force": "force", "moment": "moment",
            "mass": "mass", "gravity": "acceleration", "position": "length",
            "quaternion": "dimensionless"}
 UNIT_OF = {"temperature": "degC", "force": "N", "moment": "N m", "mass": "kg",

@@ -59,6 +59,8 @@ class SweepResult:
         for key, actuator in solution.actuators.items():
             row[f"{key}.tension [N]"] = actuator.tension
             row[f"{key}.stroke [m]"] = actuator.stroke
+            if actuator.slack_length is not None:
+                row[f"{key}.slack_length [m]"] = actuator.slack_length
             if actuator.free_stroke is not None:
                 row[f"{key}.free_stroke [m]"] = actuator.free_stroke
         for j, p in enumerate(self.parameters):
@@ -126,7 +128,8 @@ def _format(value):
 # ---------------------------------------------------------------------- events
 def find_events(robot, points, parameters):
     """Events between consecutive points: a TCA tension changing sign or leaving the law's fit
-    range, the Jacobian's determinant changing sign, a fold (lam turning back, arclength)."""
+    range, a tension-only actuator going slack or becoming taut, the Jacobian's determinant
+    changing sign, a fold (lam turning back, arclength)."""
     events = []
     if len(points) < 2:
         return events
@@ -142,9 +145,15 @@ def find_events(robot, points, parameters):
 
     for index, (a, b) in enumerate(zip(points[:-1], points[1:])):
         between = lambda fraction: a.lam + fraction * (b.lam - a.lam)   # noqa: E731
-        for actuator in robot.tcas:
-            fa, fb = (p.solution.actuators[actuator.key].tension for p in (a, b))
-            if fa * fb < 0 or (fa != 0 and fb == 0):
+        for actuator in robot.unknowns:
+            ra, rb = (p.solution.actuators[actuator.key] for p in (a, b))
+            if actuator.tension_only and ra.slack != rb.slack:
+                event("slack" if rb.slack else "taut", between(0.5),
+                      f"{actuator.key} {'goes slack' if rb.slack else 'becomes taut'}")
+            fa, fb = ra.tension, rb.tension
+            if actuator.kind != "tca":
+                continue
+            if not actuator.tension_only and (fa * fb < 0 or (fa != 0 and fb == 0)):
                 event("tension_sign", between(fa / (fa - fb)),
                       f"{actuator.key} tension changes sign ({fa * 1e3:.4g} -> {fb * 1e3:.4g} mN)")
             limit = actuator.law.monotone_limit
