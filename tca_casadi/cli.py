@@ -1,4 +1,4 @@
-"""Command line: ``tca-casadi validate|solve|check|sweep|inverse SCENARIO ...``.
+"""Command line: ``tca-casadi validate|solve|check|sweep|inverse|sequence SCENARIO ...``.
 
 Exit codes: 0 success, 1 the solver did not converge (``check``: the solvers disagree),
 2 bad input (one line on stderr). ``sweep``: 1 when the run stopped before the stop value;
@@ -96,6 +96,15 @@ def build_parser():
                          help="output directory (default: results/<scenario name>/inverse)")
     inverse.add_argument("--no-plot", action="store_true", help="do not draw inverse.png")
     inverse.add_argument("--quiet", action="store_true", help="no progress bar (--path)")
+
+    sequence = commands.add_parser("sequence", help="solve the scenario's sequence: steps; table, PNGs, animation")
+    _scenario_arguments(sequence)
+    sequence.add_argument("-o", "--output", type=Path, default=None,
+                          help="output directory (default: results/<scenario name>/sequence)")
+    sequence.add_argument("--frames", type=int, default=6,
+                          help="intermediate frames per transition in the animation (default 6)")
+    sequence.add_argument("--no-animation", action="store_true", help="no GIF/MP4")
+    sequence.add_argument("--quiet", action="store_true", help="no progress bars")
     return parser
 
 
@@ -214,6 +223,26 @@ def _inverse(args):
     return 0 if result.reachable and result.verified else 1
 
 
+def _sequence(args):
+    from .plotting.animation import save_animation, save_step_pngs
+    from .simulation import Simulation
+    from .studies.sequence import run_sequence
+    sim = Simulation.from_file(args.scenario, args.overrides)
+    frames = 0 if args.no_animation else max(args.frames, 0)
+    result = _with_progress(lambda progress: run_sequence(sim, frames_per_step=frames, progress=progress),
+                            "steps", args.quiet)
+    output = args.output or Path("results") / sim.scenario.name / "sequence"
+    output.mkdir(parents=True, exist_ok=True)
+    written = [result.to_csv(output / "sequence.csv"), *save_step_pngs(result, output)]
+    if not args.no_animation:
+        written += _with_progress(lambda progress: save_animation(result, output, progress=progress),
+                                  "animation", args.quiet)
+    print(result.summary())
+    print(f"wrote {len(written)} files to {output}: sequence.csv, step PNGs"
+          + ("" if args.no_animation else ", " + ", ".join(p.name for p in written if p.suffix in (".gif", ".mp4"))))
+    return 0 if result.converged else 1
+
+
 def _number(text):
     """A plain number where the text is one; else the text (a value with a unit)."""
     try:
@@ -236,7 +265,7 @@ def _with_progress(run, label, quiet=False):
 
 
 COMMANDS = {"validate": _validate, "solve": _solve, "check": _check, "sweep": _sweep,
-            "inverse": _inverse}
+            "inverse": _inverse, "sequence": _sequence}
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -181,7 +181,7 @@ class Robot:
             for key in ("force", "moment", "mass"):
                 load.pop(key, None)
         data.pop("gravity"), data.pop("base"), data.pop("name"), data.pop("description")
-        data.pop("inverse", None)
+        data.pop("inverse", None), data.pop("sequence", None)
         return repr(data)
 
 

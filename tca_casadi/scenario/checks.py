@@ -6,7 +6,7 @@ from ..errors import ScenarioError
 
 #: top-level keys; module and load names must differ from them so dotted paths stay unambiguous
 RESERVED = ("name", "description", "gravity", "base", "materials", "tca_types", "modules",
-            "loads", "solver", "inverse")
+            "loads", "solver", "inverse", "sequence")
 
 
 def fail(raw, sources, path, message):

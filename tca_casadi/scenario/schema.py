@@ -366,6 +366,13 @@ class InverseOptions(Strict):
     method: Literal["ipopt", "reduced"] = "ipopt"
 
 
+# ----------------------------------------------------------------------------- sequences
+class SequenceStep(Strict):
+    """One step of a sequence: values set by dotted path (applied on top of the previous steps)."""
+    name: str = Field(min_length=1)
+    set: dict[str, object] = Field(default_factory=dict)
+
+
 class Scenario(Strict):
     """A whole robot: modules in series from a base, loads, gravity and solver options."""
     name: str = "scenario"
@@ -378,5 +385,6 @@ class Scenario(Strict):
     loads: list[Load] = Field(default_factory=list)
     solver: SolverOptions = Field(default_factory=SolverOptions)
     inverse: Optional[InverseOptions] = None
+    sequence: Optional[list[SequenceStep]] = None
     _raw: Optional[dict] = PrivateAttr(default=None)
     _sources: object = PrivateAttr(default=None)

@@ -1,0 +1,72 @@
+"""Frames and animations of a sequence: one PNG per step, and a GIF (MP4 too where ffmpeg
+exists) that plays the transitions between steps."""
+import shutil
+
+import numpy as np
+
+from .robot3d import _pyplot, draw_robot
+
+
+def save_step_pngs(result, directory):
+    """``step_XX_NAME.png`` for every step, drawn as the paper draws the robot."""
+    paths = []
+    for index, (name, solution) in enumerate(zip(result.names, result.solutions)):
+        plt = _pyplot()
+        ax = draw_robot(solution, title=f"({chr(97 + index) if index < 26 else index}) {name}")
+        _fix_limits(ax, _limits(result))
+        path = directory / f"step_{index:02d}_{_slug(name)}.png"
+        ax.figure.tight_layout()
+        ax.figure.savefig(path, dpi=110)
+        plt.close(ax.figure)
+        paths.append(path)
+    return paths
+
+
+def save_animation(result, directory, fps=8, progress=None):
+    """``sequence.gif`` (and ``sequence.mp4`` when ffmpeg is on the PATH): every transition
+    frame and every step. Returns the paths written."""
+    from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
+    plt = _pyplot()
+    frames = []
+    for name, solution, transition in zip(result.names, result.solutions, result.transitions):
+        frames += [(f"-> {name}", s) for _, s in transition] + [(name, solution)] * 3
+    fig = plt.figure(figsize=(5.6, 5.6))
+    ax = fig.add_subplot(projection="3d")
+    limits = _limits(result)
+
+    def draw(index):
+        ax.clear()
+        title, solution = frames[index]
+        draw_robot(solution, ax=ax, title=title)
+        _fix_limits(ax, limits)
+        if progress is not None:
+            progress((index + 1) / len(frames), title)
+        return []
+
+    animation = FuncAnimation(fig, draw, frames=len(frames), blit=False)
+    paths = [directory / "sequence.gif"]
+    animation.save(paths[0], writer=PillowWriter(fps=fps))
+    if shutil.which("ffmpeg"):
+        paths.append(directory / "sequence.mp4")
+        animation.save(paths[1], writer=FFMpegWriter(fps=fps))
+    plt.close(fig)
+    return paths
+
+
+def _limits(result):
+    points = [m.p for s in result.solutions for m in s.modules]
+    points += [m.p for t in result.transitions for _, s in t for m in s.modules]
+    every = np.hstack(points) * 1e3
+    low, high = every.min(axis=1), every.max(axis=1)
+    center, half = (low + high) / 2, max((high - low).max() / 2, 1.0) * 1.15
+    return center, half
+
+
+def _fix_limits(ax, limits):
+    center, half = limits
+    for setter, c in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), center):
+        setter(c - half, c + half)
+
+
+def _slug(name):
+    return "".join(ch if ch.isalnum() else "_" for ch in name.lower()).strip("_")[:40] or "step"

@@ -1,0 +1,68 @@
+"""Sequences: cumulative steps solved by continuation from the previous one, agreement with
+independent solves and with shooting, the CLI's table, PNGs and animation."""
+import csv
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from conftest import SCENARIOS
+from tca_casadi import ScenarioError, Simulation
+from tca_casadi.cli import main
+from tca_casadi.studies.compare import compare_solutions
+from tca_casadi.studies.sequence import run_sequence
+
+BENDING = SCENARIOS / "bending_module.yaml"
+CUMULATIVE = [{}, {"bending.tca1.temperature": 100},
+              {"bending.tca1.temperature": 100, "bending.tca2.temperature": 25, "bending.tca3.temperature": 25},
+              {"bending.tca1.temperature": 25, "bending.tca2.temperature": 25, "bending.tca3.temperature": 25}]
+
+
+@pytest.fixture(scope="module")
+def sequence():
+    return run_sequence(Simulation.from_file(BENDING))
+
+
+def test_steps_equal_independent_solves_of_their_cumulative_settings(sequence):
+    assert sequence.converged and len(sequence.solutions) == 4
+    for solution, settings in zip(sequence.solutions, CUMULATIVE):
+        alone = Simulation.from_file(BENDING, [f"{k}={v}" for k, v in settings.items()]).solve()
+        assert np.max(np.abs(solution.tip_position - alone.tip_position)) < 1e-9
+    tips = np.array([s.tip_position for s in sequence.solutions])
+    assert tips[1][0] == pytest.approx(0.0, abs=1e-9)           # all three heated: straight
+    assert tips[2][0] > 0.01                                   # only TCA 1: bends towards it (+x)
+    assert tips[0][0] < -0.01                                  # TCA 2 and 3: away from TCA 1
+
+
+def test_every_step_agrees_with_shooting(sequence):
+    sim = Simulation.from_file(BENDING)
+    shooting = sim.solver("shooting")
+    for solution in sequence.solutions:
+        shooting.sample_s = [m.s for m in solution.modules]
+        report = compare_solutions(solution, shooting.solve(solution.parameters, solution))
+        assert report.agree, report.summary()
+
+
+def test_sequence_command_writes_table_pngs_and_animation(tmp_path, capsys):
+    assert main(["sequence", str(BENDING), "-o", str(tmp_path), "--frames", "2", "--quiet"]) == 0
+    with (tmp_path / "sequence.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    assert [r["name"] for r in rows] == ["TCA 2 and 3 heated", "TCA 1 heated too", "only TCA 1 heated", "all cool"]
+    assert float(rows[2]["bending.tca1.temperature [degC]"]) == 100.0
+    assert len(list(tmp_path.glob("step_*.png"))) == 4
+    with Image.open(tmp_path / "sequence.gif") as gif:       # identical frames are merged, durations add
+        durations = []
+        for index in range(gif.n_frames):
+            gif.seek(index)
+            durations.append(gif.info["duration"])
+    # 4 steps held 3 frames each, 2 frames in each of the 4 transitions, at 8 frames per second
+    assert sum(durations) == pytest.approx((4 * 3 + 4 * 2) * 125, rel=0.05)   # GIF stores centiseconds
+    assert len(durations) >= 4 + 3 * 2                          # every step and moving frame is there
+    assert "all converged" in capsys.readouterr().out
+
+
+def test_missing_sequence_and_bad_paths_are_named(tmp_path, capsys):
+    assert main(["sequence", str(SCENARIOS / "twisting_module.yaml"), "-o", str(tmp_path)]) == 2
+    assert "no sequence" in capsys.readouterr().err
+    with pytest.raises(ScenarioError, match="tca7"):
+        run_sequence(Simulation.from_file(BENDING), steps=[{"name": "bad", "set": {"bending.tca7.temperature": 50}}])
