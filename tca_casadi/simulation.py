@@ -8,6 +8,8 @@
 import logging
 import time
 
+import numpy as np
+
 
 from .errors import ScenarioError
 from .model import Robot
@@ -99,6 +101,16 @@ class Simulation:
                 solution = _better(solution, self.continue_from_rest(solver))
         self.last = solution
         return solution
+
+    def solve_at(self, params, method=None):
+        """Solve at the parameter vector ``params`` from the reference state (cold, with
+        continuation), leaving this simulation's own parameters and last solution unchanged."""
+        saved, last = self.params.copy(), self.last
+        try:
+            self.params = np.array(params, dtype=float)
+            return self.solve(method=method)
+        finally:
+            self.params, self.last = saved, last
 
     def continue_from_rest(self, solver, first_step=0.25, min_step=1e-3):
         """Follow ``P(lam) = P_rest + lam (P - P_rest)`` from the reference state (lam = 0, exact)

@@ -351,12 +351,7 @@ class InverseStatics:
         params = self.params_at(tau)
         key = params.tobytes()
         if key not in self._forward_cache:
-            saved = self.sim.params.copy()
-            try:
-                self.sim.params = params
-                self._forward_cache[key] = self.sim.solve(method="collocation")
-            finally:
-                self.sim.params = saved
+            self._forward_cache[key] = self.sim.solve_at(params, method="collocation")
         return self._forward_cache[key]
 
     def _forward_w(self, tau):
@@ -439,12 +434,7 @@ class InverseStatics:
             point, _, _, failure = follower.advance(follower.point(0.0, start), 1.0, 0.5, 0.5, 1e-3)
             forward = None if failure is not None else point.solution
         if forward is None:
-            saved = self.sim.params.copy()
-            try:
-                self.sim.params = params
-                forward = self.sim.solve(method="collocation")
-            finally:
-                self.sim.params = saved
+            forward = self.sim.solve_at(params, method="collocation")
         names = [m.name for m in forward.modules]
         point_name = names[-1] if target.point == "tip" else target.point
         achieved = forward.modules[names.index(point_name)].tip_position

@@ -101,12 +101,7 @@ class Sweep:
         """Run the sweep; ``progress(fraction, text)`` is called after every accepted point.
         Returns a :class:`SweepResult` (``completed`` False, with the reason, if it stopped)."""
         started = time.perf_counter()
-        saved = self.sim.params.copy()
-        try:
-            self.sim.params = self.P_start.copy()
-            first = self.sim.solve(method="collocation")
-        finally:
-            self.sim.params = saved
+        first = self.sim.solve_at(self.P_start, method="collocation")
         if not first.converged:
             return self._result([], False, f"no equilibrium at the start: {first.message}", started)
         points = [self._record(self.follower.point(0.0, first))]
