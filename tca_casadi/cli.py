@@ -22,6 +22,14 @@ def _scenario_arguments(parser):
                              "(repeatable)")
 
 
+def _output_arguments(parser, default, plots):
+    """``-o/--output``, ``--no-plot`` (what ``plots`` names) and ``--quiet``."""
+    parser.add_argument("-o", "--output", type=Path, default=None,
+                        help=f"output directory (default: results/<scenario name>/{default})")
+    parser.add_argument("--no-plot", action="store_true", help=f"do not draw {plots}")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
 def build_parser():
     parser = argparse.ArgumentParser(
         prog="tca-casadi",
@@ -65,10 +73,7 @@ def build_parser():
                        help="pseudo-arclength continuation: follow the branch through folds")
     sweep.add_argument("--min-step", type=float, default=1e-4, metavar="FRACTION",
                        help="smallest step, as a fraction of the range, before a run stops (default 1e-4)")
-    sweep.add_argument("-o", "--output", type=Path, default=None,
-                       help="output directory (default: results/<scenario name>/sweep)")
-    sweep.add_argument("--no-plot", action="store_true", help="do not draw sweep.png and sweep_robots.png")
-    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    _output_arguments(sweep, "sweep", "sweep.png and sweep_robots.png")
 
     inverse = commands.add_parser("inverse", help="inverse statics: TCA temperatures for a target tip pose")
     _scenario_arguments(inverse)
@@ -92,10 +97,7 @@ def build_parser():
                               "temperatures with the equilibrium solved and differentiated exactly (faster)")
     inverse.add_argument("--path", type=Path, default=None, metavar="CSV",
                          help="a CSV of targets (x, y, z [m], optional dx, dy, dz or qw..qz): one answer per row")
-    inverse.add_argument("-o", "--output", type=Path, default=None,
-                         help="output directory (default: results/<scenario name>/inverse)")
-    inverse.add_argument("--no-plot", action="store_true", help="do not draw inverse.png")
-    inverse.add_argument("--quiet", action="store_true", help="no progress bar (--path)")
+    _output_arguments(inverse, "inverse", "inverse.png")
 
     sequence = commands.add_parser("sequence", help="solve the scenario's sequence: steps; table, PNGs, animation")
     _scenario_arguments(sequence)

@@ -318,7 +318,6 @@ class InverseStatics:
         vector = self._target_vector(target)
         best, iterations, tried = None, 0, 0
         seeds = [(initial.w, initial.tau)] if initial is not None and initial.w is not None else []
-        seeds += [None] * 0
         candidates = seeds + self.start_points()
         for candidate in candidates:
             w0, tau0 = candidate if isinstance(candidate, tuple) else (self._forward_w(candidate), candidate)
@@ -463,21 +462,24 @@ def read_targets(path, point="tip"):
             raise ScenarioError(f"{path}: the target path needs columns x, y, z [m]; found {reader.fieldnames}")
         targets = []
         for line, row in enumerate(reader, start=2):
-            def take(keys):
-                if not all(k in columns and row[columns[k]].strip() for k in keys):
-                    return None
-                try:
-                    return [float(row[columns[k]]) for k in keys]
-                except ValueError:
-                    raise ScenarioError(f"{path}:{line}: not a number in {[row[columns[k]] for k in keys]}") from None
             try:
-                targets.append(Target.create(take("xyz"), take(("dx", "dy", "dz")),
-                                             take(("qw", "qx", "qy", "qz")), point))
+                targets.append(Target.create(_take(row, columns, "xyz"), _take(row, columns, ("dx", "dy", "dz")),
+                                             _take(row, columns, ("qw", "qx", "qy", "qz")), point))
             except ScenarioError as exc:
                 raise ScenarioError(f"{path}:{line}: {exc}") from None
     if not targets:
         raise ScenarioError(f"{path}: no targets")
     return targets
+
+
+def _take(row, columns, keys):
+    """The numbers of ``keys`` in a CSV row, or None when any is absent or empty."""
+    if not all(k in columns and row[columns[k]].strip() for k in keys):
+        return None
+    try:
+        return [float(row[columns[k]]) for k in keys]
+    except ValueError:
+        raise ScenarioError(f"not a number in {[row[columns[k]] for k in keys]}") from None
 
 
 def write_path_results(path, results):

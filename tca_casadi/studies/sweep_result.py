@@ -144,7 +144,8 @@ def find_events(robot, points, parameters):
                        "message": f"{text} near {where}"})
 
     for index, (a, b) in enumerate(zip(points[:-1], points[1:])):
-        between = lambda fraction: a.lam + fraction * (b.lam - a.lam)   # noqa: E731
+        def between(fraction, a=a, b=b):
+            return a.lam + fraction * (b.lam - a.lam)
         for actuator in robot.unknowns:
             ra, rb = (p.solution.actuators[actuator.key] for p in (a, b))
             if actuator.tension_only and ra.slack != rb.slack:
