@@ -32,9 +32,8 @@ SCENARIOS = ROOT / "scenarios"
 
 
 def arm_source():
-    """scenarios/arm.yaml when shipped, else the bending module with the twisting module below."""
-    if (SCENARIOS / "arm.yaml").exists():
-        return SCENARIOS / "arm.yaml"
+    """The arm's chain without its gripper: the bending module with the twisting module below
+    (the README's "arm (bending + twisting)" row; the gripper's sequence is timed separately)."""
     bending, twisting = (yaml.safe_load((SCENARIOS / f"{n}.yaml").read_text())
                          for n in ("bending_module", "twisting_module"))
     raw = dict(bending, name="arm_bending_twisting", loads=[], modules=bending["modules"] + twisting["modules"])

@@ -106,6 +106,9 @@ def build_parser():
     sequence.add_argument("--frames", type=int, default=6,
                           help="intermediate frames per transition in the animation (default 6)")
     sequence.add_argument("--no-animation", action="store_true", help="no GIF/MP4")
+    sequence.add_argument("--check", action="store_true",
+                          help="also solve every step by shooting and compare (as `check` does); "
+                               "writes sequence_check.json")
     sequence.add_argument("--quiet", action="store_true", help="no progress bars")
     return parser
 
@@ -135,7 +138,8 @@ def _validate(args):
     robot = Robot.from_scenario(scenario)
     print(f"{args.scenario}: valid scenario {scenario.name!r}: {len(robot.modules)} module(s), "
           f"{len(robot.tcas)} TCA(s), {len(robot.actuators) - len(robot.tcas)} tendon(s), "
-          f"{len(scenario.loads)} load(s)")
+          f"{len(scenario.loads)} load(s), {len(scenario.objects)} object(s); tip: "
+          f"{robot.modules[robot.tip_index].name}")
     print("parameters (changeable without rebuilding): " + ", ".join(robot.layout.names()))
     return 0
 
@@ -231,18 +235,22 @@ def _sequence(args):
     from .studies.sequence import run_sequence
     sim = Simulation.from_file(args.scenario, args.overrides)
     frames = 0 if args.no_animation else max(args.frames, 0)
-    result = _with_progress(lambda progress: run_sequence(sim, frames_per_step=frames, progress=progress),
-                            "steps", args.quiet)
+    result = _with_progress(lambda progress: run_sequence(sim, frames_per_step=frames, progress=progress,
+                                                          check=args.check), "steps", args.quiet)
     output = args.output or Path("results") / sim.scenario.name / "sequence"
     output.mkdir(parents=True, exist_ok=True)
     written = [result.to_csv(output / "sequence.csv"), *save_step_pngs(result, output)]
+    if args.check:
+        reports = {name: report.to_dict() for name, report in zip(result.names, result.checks)}
+        (output / "sequence_check.json").write_text(json.dumps(reports, indent=2))
+        written.append(output / "sequence_check.json")
     if not args.no_animation:
         written += _with_progress(lambda progress: save_animation(result, output, progress=progress),
                                   "animation", args.quiet)
     print(result.summary())
     print(f"wrote {len(written)} files to {output}: sequence.csv, step PNGs"
           + ("" if args.no_animation else ", " + ", ".join(p.name for p in written if p.suffix in (".gif", ".mp4"))))
-    return 0 if result.converged else 1
+    return 0 if result.converged and result.agree is not False else 1
 
 
 def _number(text):

@@ -94,15 +94,16 @@ class Solution:
     parameter_names: Optional[dict] = None
     raw: dict = field(default_factory=dict, repr=False)
     scenario_name: str = ""
+    tip_module: int = -1      # index of the module whose tip is "the tip" (Robot.tip_index)
 
     # ------------------------------------------------------------------ tip
     @property
     def tip_position(self):
-        return self.modules[-1].tip_position
+        return self.modules[self.tip_module].tip_position
 
     @property
     def tip_rotation(self):
-        return self.modules[-1].tip_rotation
+        return self.modules[self.tip_module].tip_rotation
 
     @property
     def tip_quaternion(self):

@@ -16,8 +16,8 @@ Constraints ``g`` (equalities, each scaled to order one), per module in order:
     the base pose (first module only); the rod equations at every collocation point,
     ``[p' - R v, h' - Omega h / 2, equilibrium (6)]``; the partial lengths (Gauss quadrature of
     ``|a|`` over each interval); at the interior breakpoints, continuity of p and h and the wrench
-    jump ``K (xi+ - xi-) + point wrenches = 0``; at the module's end, the junction link to the next
-    module (pose through the connector, wrench balance) or, for the last module, the tip wrench.
+    jump ``K (xi+ - xi-) + point wrenches = 0``; at the module's end, the pose link to each child
+    module (through its connector) and the wrench balance (the tip wrench when it has none).
     Last, one compatibility equation per unknown tension (a TCA's law multiplied through by
     ``G_t(F)``, a tendon's length condition; Fischer-Burmeister for ``tension_only``).
 The forward problem is square: ``len(w) == len(g)``.
@@ -233,19 +233,16 @@ class CollocationNLP:
         self._g.append(ca.vec(ca.diag(self._wrench_scale(m)) @ jump))
 
     def _module_end(self, m, end):
+        """The pose link to each child module (through its connector) and the wrench balance at
+        the tip: ``W(L) = point wrenches + what the children put on it`` (none: a free tip)."""
         module = self.robot.modules[m]
-        applied = _add(ca.DM.zeros(6), self._point_wrenches(m, module.length, end, None))
-        if m + 1 == len(self.robot.modules):
-            self._g.append((self._wrench(m, end) - applied) * self._wrench_scale(m))
-            return
-        nxt = self.robot.modules[m + 1]
-        start = self._states[m + 1][:, 0]
-        position, quaternion = boundary.junction_pose(end, nxt)
-        self._g.append((start[P_] - position) / module.length)
-        self._g.append(start[H_] - quaternion)
-        transmitted = boundary.transmit(self._base_wrench(m + 1, start), nxt)
-        weight = boundary.connector_weight(end, nxt, self.param)
-        balance = self._wrench(m, end) - applied - _add(transmitted, weight)
+        balance = self._wrench(m, end) - _add(ca.DM.zeros(6), self._point_wrenches(m, module.length, end, None))
+        for c in self.robot.children(m):
+            child, start = self.robot.modules[c], self._states[c][:, 0]
+            position, quaternion = boundary.junction_pose(end, child)
+            self._g.append((start[P_] - position) / module.length)
+            self._g.append(start[H_] - quaternion)
+            balance = balance - boundary.child_wrench(end, child, self._base_wrench(c, start), self.param)
         self._g.append(balance * self._wrench_scale(m))
 
     # ------------------------------------------------------------------ TCA law

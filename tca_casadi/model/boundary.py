@@ -31,6 +31,9 @@ def anchor_wrench(module, actuator, s, state, tension):
 def point_load_wrench(load, h, param):
     """Wrench of a point force/moment or a point mass's weight at the centerline."""
     zero = ca.DM.zeros(3)
+    if load.kind == "object":
+        weight = param(f"{load.name}.held") * param(f"{load.name}.mass") * load.share * param("gravity")
+        return POINT_WRENCH(h, weight, zero, zero, zero)
     if load.kind == "mass":
         return POINT_WRENCH(h, param(f"{load.name}.mass") * param("gravity"), zero, zero, zero)
     force, moment = param(f"{load.name}.force"), param(f"{load.name}.moment")
@@ -109,6 +112,17 @@ def connector_weight(end, next_module, param):
         return None
     weight = rotation_matrix(end[H_]).T @ (connector.mass * param("gravity"))
     return ca.vertcat(ca.cross(ca.DM(connector.center_of_mass), weight), weight)
+
+
+def child_wrench(end, child, base_wrench, param):
+    """Wrench that a child module puts on its parent's tip (parent tip frame, ``end`` the
+    parent's end state): the child's base wrench through the connector plus the connector's
+    weight. A decoupled child passes on only the force (its weight and payload: the net external
+    force on it), not the moment (SPEC section 5)."""
+    total = add(transmit(base_wrench, child), connector_weight(end, child, param))
+    if child.decoupled:
+        return ca.vertcat(ca.DM.zeros(3), total[3:6])
+    return total
 
 
 def add(a, b):

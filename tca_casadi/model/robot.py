@@ -44,12 +44,14 @@ class ActuatorModel:
 
 @dataclass
 class PointLoadModel:
-    """A point force/moment (or a mass's weight) at arc length ``s`` of module ``module``."""
+    """A point force/moment (or a mass's weight) at arc length ``s`` of module ``module``; an
+    ``object`` load is a held object's weight share, ``held * mass * share * g``."""
     name: str
     module: int
     s: float
     frame: str                # 'global' or 'body'
-    kind: str                 # 'point' or 'mass'
+    kind: str                 # 'point', 'mass' or 'object'
+    share: float = 1.0
 
 
 @dataclass
@@ -81,6 +83,8 @@ class ModuleModel:
     section: object
     connector: Optional[ConnectorModel] = None
     actuators: list = field(default_factory=list)
+    parent: Optional[int] = None      # index of the module whose tip carries this base
+    decoupled: bool = False           # only its net force loads the parent (SPEC section 5)
 
     @property
     def bending_stiffness(self):
@@ -132,6 +136,22 @@ class Robot:
         order: the solvers' tension unknowns and compatibility equations."""
         return [a for a in self.actuators if a.unknown_tension]
 
+    def children(self, m):
+        """Indices of the modules whose base sits on module m's tip, in scenario order."""
+        return [c for c, module in enumerate(self.modules) if module.parent == m]
+
+    @property
+    def tip_index(self):
+        """The module whose tip is "the tip": the end of the trunk, followed from the base while a
+        module carries exactly one coupled child (the last module of a chain; the module that
+        carries a tree's fingers or a decoupled gripper)."""
+        m = 0
+        while True:
+            coupled = [c for c in self.children(m) if not self.modules[c].decoupled]
+            if len(coupled) != 1:
+                return m
+            m = coupled[0]
+
     @property
     def tcas(self):
         """Actuators whose tension is an unknown, in the order of the NLP's tension variables."""
@@ -141,8 +161,12 @@ class Robot:
     def from_scenario(cls, scenario):
         """Model of a validated scenario; raises ScenarioError for a route outside the body."""
         modules, actuators = [], []
+        names = [config.name for config in scenario.modules]
         for index, config in enumerate(scenario.modules):
             module = _module(scenario, config)
+            if index > 0:
+                module.parent = names.index(config.parent) if config.parent else index - 1
+                module.decoupled = bool(config.decoupled)
             modules.append(module)
             for a_index, a_config in enumerate(config.actuators):
                 actuator = _actuator(scenario, index, config, a_index, a_config)
@@ -166,7 +190,7 @@ class Robot:
             rest[slot] = actuator.law.reference_temperature if actuator.kind == "tca" else 0.0
             # a displacement tendon at q = 0 is exactly taut with no tension: the reference state
         for name in self.layout.names():
-            if name.endswith((".force", ".moment", ".mass")):
+            if name.endswith((".force", ".moment", ".mass", ".held")):
                 rest[self.layout[name]] = 0.0
         return rest
 
@@ -180,6 +204,9 @@ class Robot:
         for load in data["loads"]:
             for key in ("force", "moment", "mass"):
                 load.pop(key, None)
+        for item in data["objects"]:
+            for key in ("mass", "held", "position", "yaw", "size"):
+                item.pop(key)
         data.pop("gravity"), data.pop("base"), data.pop("name"), data.pop("description")
         data.pop("inverse", None), data.pop("sequence", None)
         return repr(data)
@@ -263,6 +290,11 @@ def _loads(scenario):
             s = {"end": length, "start": 0.0}.get(load.at, load.at) if isinstance(load.at, str) else load.at
             frame = load.frame if load.kind == "point" else "global"
             point.append(PointLoadModel(load.name, index, float(s), frame, load.kind))
+    for item in scenario.objects:
+        for holder in item.held_by:
+            index = module_index[holder]
+            point.append(PointLoadModel(item.name, index, scenario.modules[index].length, "global",
+                                        "object", 1.0 / len(item.held_by)))
     return point, distributed
 
 
@@ -282,7 +314,12 @@ def _parameters(scenario, actuators, point_loads, distributed):
         config = configs[(scenario.modules[actuator.module].name, actuator.name)]
         put(actuator.parameter, getattr(config, actuator.control))
     loads = {load.name: load for load in scenario.loads}
+    for item in scenario.objects:
+        put(f"{item.name}.mass", item.mass)
+        put(f"{item.name}.held", float(item.held))
     for load in point_loads + distributed:
+        if getattr(load, "kind", None) == "object":
+            continue
         config = loads[load.name]
         if config.kind == "mass":
             put(f"{load.name}.mass", config.mass)

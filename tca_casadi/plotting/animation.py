@@ -1,18 +1,22 @@
 """Frames and animations of a sequence: one PNG per step, and a GIF (MP4 too where ffmpeg
 exists) that plays the transitions between steps."""
 import shutil
+from pathlib import Path
 
 import numpy as np
 
-from .robot3d import _pyplot, draw_robot
+from .robot3d import _pyplot, draw_robot, set_equal_limits
 
 
 def save_step_pngs(result, directory):
     """``step_XX_NAME.png`` for every step, drawn as the paper draws the robot."""
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
     paths = []
     for index, (name, solution) in enumerate(zip(result.names, result.solutions)):
         plt = _pyplot()
-        ax = draw_robot(solution, title=f"({chr(97 + index) if index < 26 else index}) {name}")
+        objects = result.objects[index].values() if result.objects else ()
+        ax = draw_robot(solution, title=f"({chr(97 + index) if index < 26 else index}) {name}", objects=objects)
         _fix_limits(ax, _limits(result))
         path = directory / f"step_{index:02d}_{_slug(name)}.png"
         ax.figure.tight_layout()
@@ -26,18 +30,22 @@ def save_animation(result, directory, fps=8, progress=None):
     """``sequence.gif`` (and ``sequence.mp4`` when ffmpeg is on the PATH): every transition
     frame and every step. Returns the paths written."""
     from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
     plt = _pyplot()
     frames = []
-    for name, solution, transition in zip(result.names, result.solutions, result.transitions):
-        frames += [(f"-> {name}", s) for _, s in transition] + [(name, solution)] * 3
+    for index, (name, solution, transition) in enumerate(zip(result.names, result.solutions, result.transitions)):
+        moving = result.transition_objects[index] if result.transition_objects else [{}] * len(transition)
+        final = result.objects[index] if result.objects else {}
+        frames += [(f"-> {name}", s, o) for (_, s), o in zip(transition, moving)] + [(name, solution, final)] * 3
     fig = plt.figure(figsize=(5.6, 5.6))
     ax = fig.add_subplot(projection="3d")
     limits = _limits(result)
 
     def draw(index):
         ax.clear()
-        title, solution = frames[index]
-        draw_robot(solution, ax=ax, title=title)
+        title, solution, objects = frames[index]
+        draw_robot(solution, ax=ax, title=title, objects=objects.values())
         _fix_limits(ax, limits)
         if progress is not None:
             progress((index + 1) / len(frames), title)
@@ -56,16 +64,13 @@ def save_animation(result, directory, fps=8, progress=None):
 def _limits(result):
     points = [m.p for s in result.solutions for m in s.modules]
     points += [m.p for t in result.transitions for _, s in t for m in s.modules]
+    points += [pose.corners() for step in result.objects for pose in step.values()]
     every = np.hstack(points) * 1e3
-    low, high = every.min(axis=1), every.max(axis=1)
-    center, half = (low + high) / 2, max((high - low).max() / 2, 1.0) * 1.15
-    return center, half
+    return every.min(axis=1), every.max(axis=1)
 
 
 def _fix_limits(ax, limits):
-    center, half = limits
-    for setter, c in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), center):
-        setter(c - half, c + half)
+    set_equal_limits(ax, *limits)
 
 
 def _slug(name):

@@ -6,7 +6,7 @@ from ..errors import ScenarioError
 
 #: top-level keys; module and load names must differ from them so dotted paths stay unambiguous
 RESERVED = ("name", "description", "gravity", "base", "materials", "tca_types", "modules",
-            "loads", "solver", "inverse", "sequence")
+            "loads", "objects", "solver", "inverse", "sequence")
 
 
 def fail(raw, sources, path, message):
@@ -34,6 +34,14 @@ def check_references(scenario, raw, sources):
         _check_module(scenario, index, module, raw, sources)
     for index, load in enumerate(scenario.loads):
         _check_load(scenario, index, load, raw, sources)
+    _unique_names(scenario.objects, ("objects",), raw, sources)
+    for index, item in enumerate(scenario.objects):
+        if item.name in module_names or item.name in load_names:
+            fail(raw, sources, ("objects", index, "name"), f"object name {item.name!r} is also a module or load name")
+        for k, holder in enumerate(item.held_by):
+            if holder not in module_names:
+                fail(raw, sources, ("objects", index, "held_by", k),
+                     f"unknown module {holder!r}{closest(holder, module_names)}")
 
 
 def _unique_names(items, path, raw, sources):
@@ -54,6 +62,17 @@ def _check_module(scenario, index, module, raw, sources):
     if module.material not in scenario.materials:
         fail(raw, sources, path + ("material",),
              f"unknown material {module.material!r}{closest(module.material, scenario.materials)}")
+    if index == 0:
+        for key in ("parent", "decoupled"):
+            if getattr(module, key):
+                fail(raw, sources, path + (key,), f"the first module sits on the base; it has no "
+                     f"parent (remove {key}:)")
+    elif module.parent is not None:
+        earlier = [m.name for m in scenario.modules[:index]]
+        if module.parent not in earlier:
+            later = " (a parent must come before its children)" if module.parent in \
+                [m.name for m in scenario.modules] else closest(module.parent, earlier)
+            fail(raw, sources, path + ("parent",), f"unknown parent {module.parent!r}{later}")
     if index == 0 and module.connector is not None:
         fail(raw, sources, path + ("connector",),
              "the first module has no previous module to connect to (use base:)")

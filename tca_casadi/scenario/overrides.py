@@ -44,7 +44,7 @@ def resolve(raw, dotted):
     head, rest = parts[0], parts[1:]
     if head in RESERVED or not isinstance(raw, dict):
         return _walk(raw, (head,), rest, dotted)
-    for list_key in ("modules", "loads"):
+    for list_key in ("modules", "loads", "objects"):
         for index, item in enumerate(raw.get(list_key) or []):
             if isinstance(item, dict) and item.get("name") == head:
                 path = (list_key, index)
@@ -53,9 +53,9 @@ def resolve(raw, dotted):
                     if actuator is not None:
                         return _walk(raw, path + ("actuators", actuator), rest[1:], dotted)
                 return _walk(raw, path, rest, dotted)
-    names = [i.get("name") for k in ("modules", "loads") for i in (raw.get(k) or [])
+    names = [i.get("name") for k in ("modules", "loads", "objects") for i in (raw.get(k) or [])
              if isinstance(i, dict) and isinstance(i.get("name"), str)]
-    raise ScenarioError(f"--set {dotted}: {head!r} is not a top-level key, module or load"
+    raise ScenarioError(f"--set {dotted}: {head!r} is not a top-level key, module, load or object"
                         f"{closest(head, list(RESERVED) + names)}")
 
 

@@ -273,7 +273,11 @@ class Connector(Strict):
 
 
 class Module(Strict):
-    """One Cosserat rod of the chain (SPEC sections 2 and 5)."""
+    """One Cosserat rod (SPEC sections 2 and 5). Its base sits on the tip of ``parent`` (default:
+    the module before it), so modules form a chain or a tree (several fingers on one parent).
+    ``decoupled``: solved on its own at the parent's tip frame; only its net external force
+    (its weight and any payload) loads the parent's tip, its moment is neglected (the paper's
+    treatment of the gripper)."""
     name: str = Field(min_length=1)
     length: PositiveLength
     material: str
@@ -281,6 +285,8 @@ class Module(Strict):
     actuators: list[Actuator] = Field(default_factory=list)
     precurvature: Vector3Curvature = (0.0, 0.0, 0.0)
     connector: Optional[Connector] = None
+    parent: Optional[str] = None
+    decoupled: bool = False
 
 
 # ----------------------------------------------------------------------------- loads
@@ -319,6 +325,27 @@ class DistributedLoad(Strict):
 
 
 Load = Annotated[Union[PointLoad, MassLoad, DistributedLoad], Field(discriminator="kind")]
+
+
+# ----------------------------------------------------------------------------- objects
+class GraspedObject(Strict):
+    """A rigid box the robot can pick: it rests at ``position`` (its centre, global frame, turned
+    ``yaw`` about the global z axis) until ``held`` is set; while held, its weight hangs from the
+    tips of the ``held_by`` modules in equal shares and it moves with them. Contact forces are not
+    modelled."""
+    name: str = Field(min_length=1)
+    mass: NonNegativeMass
+    size: Vector3Length
+    position: Vector3Length
+    yaw: Angle = 0.0
+    held_by: list[str] = Field(min_length=1)
+    held: bool = False
+
+    @model_validator(mode="after")
+    def _positive_size(self):
+        if min(self.size) <= 0:
+            raise ValueError("size: every edge must be positive")
+        return self
 
 
 # ----------------------------------------------------------------------------- solver
@@ -383,6 +410,7 @@ class Scenario(Strict):
     tca_types: dict[str, TcaType] = Field(default_factory=dict)
     modules: list[Module] = Field(min_length=1)
     loads: list[Load] = Field(default_factory=list)
+    objects: list[GraspedObject] = Field(default_factory=list)
     solver: SolverOptions = Field(default_factory=SolverOptions)
     inverse: Optional[InverseOptions] = None
     sequence: Optional[list[SequenceStep]] = None

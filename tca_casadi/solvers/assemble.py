@@ -92,4 +92,4 @@ def build_solution(robot, params, module_data, tensions, lengths, status):
         warnings.insert(0, f"not converged: {status['message']}")
     return Solution(modules=modules, actuators=actuators, warnings=warnings,
                     parameters=np.array(params, float), parameter_names=dict(robot.layout.slices),
-                    scenario_name=robot.name, **status)
+                    scenario_name=robot.name, tip_module=robot.tip_index, **status)

@@ -34,19 +34,22 @@ def reference_states(module, s, p0, h0):
 
 
 def reference_chain(robot, params, samples):
-    """Every module's reference shape from the base pose in ``params``, through the connectors:
+    """Every module's reference shape from the base pose in ``params``, each on its parent's tip
+    through its connector:
     ``[states (13, n_m), ...]`` at the arc lengths ``samples[m]``."""
     layout = robot.layout
     p0 = np.asarray(params[layout["base.position"]], float)
     h0 = np.asarray(params[layout["base.quaternion"]], float)
-    out = []
+    out, ends = [], []
     for m, module in enumerate(robot.modules):
-        if m > 0 and module.connector is not None:
-            p0 = p0 + rotation_numpy(h0) @ module.connector.offset
-            h0 = _qmul(h0, module.connector.quaternion)
+        if m > 0:
+            p0, h0 = ends[module.parent]
+            if module.connector is not None:
+                p0 = p0 + rotation_numpy(h0) @ module.connector.offset
+                h0 = _qmul(h0, module.connector.quaternion)
         states = reference_states(module, np.append(samples[m], module.length), p0, h0)
         out.append(states[:, :-1])
-        p0, h0 = states[0:3, -1], states[3:7, -1]
+        ends.append((states[0:3, -1], states[3:7, -1]))
     return out
 
 

@@ -1,12 +1,15 @@
 """The shooting solver (SPEC section 6): an independent cross-check of collocation.
 
-Unknowns: the first module's base strains (as deviations from xi*) and the TCA tensions.
+Unknowns: the base strains (as deviations from xi*) of every module whose start is not fixed by
+its parent's tip balance (the first module, each decoupled module, each finger of a tree after
+the first) and the unknown tensions.
 For a guess, the explicit equilibrium ``xi' = (K + A)^-1 (...)`` (paper eq. 25; obtained by solving
 the same CasADi rod residual that collocation imposes, which is linear in xi') is integrated
 module by module with ``scipy.integrate.solve_ivp`` (DOP853, tight tolerances), segment by segment
 between breakpoints, applying the wrench jumps at anchors, point loads and junctions (a small
-Newton solve where a jump depends on the strain after it). Residuals: the tip wrench and every
-TCA's compatibility equation, solved by MINPACK's Powell dog-leg trust region (``hybr``).
+Newton solve where a jump depends on the strain after it). Residuals: the tip wrench of every
+module whose tip balance is not used to start a child, and every compatibility equation, solved
+by MINPACK's Powell dog-leg trust region (``hybr``).
 Only the discretisation differs from collocation: the physics Functions are the same.
 """
 import logging
@@ -48,6 +51,7 @@ class ShootingSolver:
         self._rhs = [_shooting_rhs(module) for module in robot.modules]
         self._segments = [_segments(robot, m) for m in range(len(robot.modules))]
         self._jumps = {}
+        self._free = free_starts(robot)
         #: optional extra output arc lengths per module (e.g. another solver's nodes)
         self.sample_s = None
         self.build_time_s = time.perf_counter() - start
@@ -55,19 +59,19 @@ class ShootingSolver:
 
     # ------------------------------------------------------------------ unknowns
     def _unknown_scale(self):
-        first = self.robot.modules[0]
-        strain = np.r_[first.force_scale * first.length / first.stiffness[0:3],
-                       first.force_scale / first.stiffness[3:6]]
+        strains = [_state_scale(self.robot.modules[m])[7:13] for m in self._free]
         tensions = [self.robot.modules[a.module].force_scale for a in self.robot.unknowns]
-        return np.r_[strain, tensions]
+        return np.r_[np.concatenate(strains), tensions]
 
     def initial_guess(self, initial=None):
         """Scaled unknowns from a previous Solution (any method), else the reference state."""
-        z = np.zeros(6 + len(self.robot.unknowns))
+        n_strain = 6 * len(self._free)
+        z = np.zeros(n_strain + len(self.robot.unknowns))
         if initial is not None:
-            first, module = initial.modules[0], self.robot.modules[0]
-            z[:6] = np.r_[first.u[:, 0], first.v[:, 0]] - module.xi_star
-            z[6:] = [initial.actuators[a.key].tension for a in self.robot.unknowns]
+            for k, m in enumerate(self._free):
+                start, module = initial.modules[m], self.robot.modules[m]
+                z[6 * k:6 * k + 6] = np.r_[start.u[:, 0], start.v[:, 0]] - module.xi_star
+            z[n_strain:] = [initial.actuators[a.key].tension for a in self.robot.unknowns]
         return z / self._unknown_scale()
 
     # ------------------------------------------------------------------ solve
@@ -137,27 +141,37 @@ class ShootingSolver:
         """Integrate the whole chain from unknowns z; return (residuals, trajectory)."""
         robot = self.robot
         unknowns = z * self._unknown_scale()
-        tensions = dict(zip([a.key for a in robot.unknowns], unknowns[6:]))
+        n_strain = 6 * len(self._free)
+        tensions = dict(zip([a.key for a in robot.unknowns], unknowns[n_strain:]))
         tension = _tension_lookup(robot, params, tensions)
         param = _param_lookup(robot, params)
-        state = np.r_[params[robot.layout["base.position"]], params[robot.layout["base.quaternion"]],
-                      unknowns[:6]]
+        guessed = {m: unknowns[6 * k:6 * k + 6] for k, m in enumerate(self._free)}
+        starts = {0: np.r_[params[robot.layout["base.position"]], params[robot.layout["base.quaternion"]],
+                           guessed[0]]}
         module_data, lengths = [], np.zeros(len(robot.actuators))
         residuals = []
         for m, module in enumerate(robot.modules):
-            base_wrench = _as_array(boundary.add(boundary.internal_wrench(module, state),
-                                                 boundary.point_wrenches(robot, m, 0.0, None, state, tension, param)))
+            state = starts[m]
+            base_wrench = self._base_wrench(m, state, tension, param)
             s_out, states, end, module_lengths = self._integrate(m, state, params, tension, param)
             module_data.append((s_out, states + np.r_[np.zeros(7), module.xi_star][:, None], base_wrench))
             for k, actuator in enumerate(module.actuators):
                 lengths[robot.actuators.index(actuator)] = module_lengths[k]
-            applied = boundary.add(ca.DM.zeros(6),
-                                   boundary.point_wrenches(robot, m, module.length, end, None, tension, param))
-            if m + 1 == len(robot.modules):
-                tip = _as_array(boundary.internal_wrench(module, end) - applied)
-                residuals.append(tip * _wrench_scale(module))
+            applied = boundary.point_wrenches(robot, m, module.length, end, None, tension, param)
+            balance = boundary.internal_wrench(module, end) - boundary.add(ca.DM.zeros(6), applied)
+            continued = None
+            for c in robot.children(m):
+                if c not in guessed:
+                    continued = c           # started below from what the others leave
+                    continue
+                position, quaternion = boundary.junction_pose(end, robot.modules[c])
+                starts[c] = np.r_[np.array(position).ravel(), np.array(quaternion).ravel(), guessed[c]]
+                balance = balance - boundary.child_wrench(
+                    end, robot.modules[c], self._base_wrench(c, starts[c], tension, param), param)
+            if continued is None:
+                residuals.append(_as_array(balance) * _wrench_scale(module))
             else:
-                state = self._junction(m, end, applied, tension, param)
+                starts[continued] = self._junction(end, balance, continued, tension, param)
         for actuator in robot.unknowns:
             stroke = lengths[robot.actuators.index(actuator)] - actuator.reference_length
             parameter = params[robot.layout[actuator.parameter]][0]
@@ -217,18 +231,23 @@ class ShootingSolver:
         after[7:13] = self._solve_start(m, s, target, before[3:7], tension, param)
         return after
 
-    def _junction(self, m, end, applied, tension, param):
-        """Base state of module m + 1 from the end state of module m (SPEC section 5)."""
-        robot, nxt = self.robot, self.robot.modules[m + 1]
-        position, quaternion = boundary.junction_pose(end, nxt)
+    def _base_wrench(self, m, state, tension, param):
+        """``W(0-)`` of module m: internal wrench at its start plus the point wrenches there."""
+        return _as_array(boundary.add(boundary.internal_wrench(self.robot.modules[m], state),
+                                      boundary.point_wrenches(self.robot, m, 0.0, None, state, tension, param)))
+
+    def _junction(self, end, balance, c, tension, param):
+        """Base state of the coupled child c whose base wrench must equal what the parent's tip
+        balance leaves (``balance``, parent tip frame; SPEC section 5)."""
+        robot, child = self.robot, self.robot.modules[c]
+        position, quaternion = boundary.junction_pose(end, child)
         h = np.array(quaternion).ravel()
-        balance = boundary.internal_wrench(robot.modules[m], end) - applied
-        weight = boundary.connector_weight(end, nxt, param)
-        transmitted = boundary.untransmit(balance if weight is None else balance - weight, nxt)
+        weight = boundary.connector_weight(end, child, param)
+        transmitted = boundary.untransmit(balance if weight is None else balance - weight, child)
         start_state = np.r_[np.array(position).ravel(), h, np.zeros(6)]
-        loads = boundary.point_wrenches(robot, m + 1, 0.0, start_state, None, tension, param)
+        loads = boundary.point_wrenches(robot, c, 0.0, start_state, None, tension, param)
         target = _as_array(transmitted if loads is None else transmitted - loads)
-        start_state[7:13] = self._solve_start(m + 1, 0.0, target, h, tension, param)
+        start_state[7:13] = self._solve_start(c, 0.0, target, h, tension, param)
         return start_state
 
     def _solve_start(self, m, s, target, h, tension, param):
@@ -246,6 +265,18 @@ class ShootingSolver:
 
 
 # ----------------------------------------------------------------------------- helpers
+def free_starts(robot):
+    """Modules whose base strains are shooting unknowns: the first module, every decoupled module
+    and every coupled child after the first of its parent (the first is started from the
+    parent's tip balance)."""
+    out = [0]
+    for m, module in enumerate(robot.modules[1:], start=1):
+        coupled = [c for c in robot.children(module.parent) if not robot.modules[c].decoupled]
+        if module.decoupled or coupled[0] != m:
+            out.append(m)
+    return out
+
+
 def _reference_trajectory(robot, params):
     """``(module_data, tensions, lengths)`` of the unloaded reference shape (exact, no integration)."""
     from .guess import reference_chain

@@ -279,7 +279,7 @@ class InverseStatics:
 
     def _target_vector(self, target):
         names = [m.name for m in self.robot.modules]
-        point = names[-1] if target.point == "tip" else target.point
+        point = names[self.robot.tip_index] if target.point == "tip" else target.point
         if point not in names:
             raise ScenarioError(f"target point {target.point!r} is not 'tip' or a module{closest(target.point, names)}")
         select = np.zeros(len(names))
@@ -435,7 +435,7 @@ class InverseStatics:
         if forward is None:
             forward = self.sim.solve_at(params, method="collocation")
         names = [m.name for m in forward.modules]
-        point_name = names[-1] if target.point == "tip" else target.point
+        point_name = names[forward.tip_module] if target.point == "tip" else target.point
         achieved = forward.modules[names.index(point_name)].tip_position
         difference = float(np.linalg.norm(achieved - best["position"])) if forward.converged else np.inf
         return forward, difference

@@ -21,7 +21,7 @@ from ..units import to_si
 #: last word of a layout name -> unit kind (for values given with units and CSV headers)
 KIND_OF = {"temperature": "temperature", "tension": "force", "displacement": "length", "force": "force", "moment": "moment",
            "mass": "mass", "gravity": "acceleration", "position": "length",
-           "quaternion": "dimensionless"}
+           "quaternion": "dimensionless", "held": "dimensionless"}
 UNIT_OF = {"temperature": "degC", "force": "N", "moment": "N m", "mass": "kg",
            "acceleration": "m/s^2", "length": "m", "dimensionless": "-"}
 COMPONENTS = {"x": 0, "y": 1, "z": 2, "[0]": 0, "[1]": 1, "[2]": 2, "[3]": 3}

@@ -1,7 +1,9 @@
 """Sequences (``sequence:`` in a scenario, ``tca-casadi sequence``): named steps, each setting
 values by dotted path on top of the previous ones, each solved from the previous step's
 solution. A large change inside a step (a temperature jump) is followed by predictor-corrector
-continuation from the previous parameters, so a step never jumps branches.
+continuation from the previous parameters, so a step never jumps branches. Scenario objects
+are picked, carried and put down as the steps set their ``held`` flags (:mod:`.objects`); with
+``check=True`` every step is also solved by shooting and compared.
 """
 import csv
 import time
@@ -12,7 +14,13 @@ import numpy as np
 
 from ..errors import ScenarioError
 from ..solvers.continuation import BranchFollower
+from .compare import compare_solutions
+from .objects import ObjectTracker
 from .sweep_result import bending_angle
+
+#: a grasp closes "across" the object when the tip-to-tip direction is this close to 90 deg
+#: from the object's long axis [deg]
+GRIP_ANGLE_TOLERANCE = 15.0
 
 
 @dataclass
@@ -23,10 +31,20 @@ class SequenceResult:
     solutions: list
     transitions: list = field(default_factory=list)   # per step: [(lam, Solution), ...] from the previous
     total_time_s: float = 0.0
+    objects: list = field(default_factory=list)       # per step: {name: ObjectPose} after the step
+    transition_objects: list = field(default_factory=list)  # per step: [{name: ObjectPose}, ...] per frame
+    openings: list = field(default_factory=list)      # per step: gripper opening [m] or None
+    checks: list = field(default_factory=list)        # per step: CheckReport (check=True)
+    warnings: list = field(default_factory=list)
 
     @property
     def converged(self):
         return all(s.converged for s in self.solutions)
+
+    @property
+    def agree(self):
+        """Every step agrees with shooting (None when not checked)."""
+        return all(c.agree for c in self.checks) if self.checks else None
 
     def rows(self):
         out = []
@@ -35,15 +53,27 @@ class SequenceResult:
                    "solve_time [s]": solution.solve_time_s}
             for axis, value in zip("xyz", solution.tip_position):
                 row[f"tip_{axis} [m]"] = value
+            row["tip_yaw [deg]"] = tip_yaw(solution)
             row["bending_angle [deg]"] = np.degrees(bending_angle(solution))
+            if self.openings and self.openings[index] is not None:
+                row["gripper_opening [m]"] = self.openings[index]
+            for name, pose in (self.objects[index] if self.objects else {}).items():
+                row[f"{name}.held"] = int(pose.held)
+                for axis, value in zip("xyz", pose.center):
+                    row[f"{name}.{axis} [m]"] = value
             for key, actuator in solution.actuators.items():
                 if actuator.temperature is not None:
                     row[f"{key}.temperature [degC]"] = actuator.temperature
                 row[f"{key}.tension [N]"] = actuator.tension
+            if self.checks:
+                row["shooting_tip_difference [m]"] = self.checks[index].tip_position_difference
+                row["shooting_centerline_difference [m]"] = self.checks[index].max_centerline_distance
+                row["shooting_tension_difference [-]"] = self.checks[index].worst_relative_tension
             out.append(row)
         return out
 
     def to_csv(self, path):
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
         rows = self.rows()
         with Path(path).open("w", newline="") as handle:
             writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
@@ -55,24 +85,46 @@ class SequenceResult:
     def summary(self):
         state = "all converged" if self.converged else "NOT ALL CONVERGED"
         lines = [f"sequence: {len(self.solutions)} steps, {state}, {self.total_time_s:.2f} s"]
-        for name, solution in zip(self.names, self.solutions):
+        if self.checks:
+            worst = max(c.max_centerline_distance for c in self.checks)
+            lines[0] += (f"; shooting {'AGREES' if self.agree else 'DISAGREES'} on every step" if self.agree
+                         else "; shooting DISAGREES on some step") + f" (worst centerline {worst:.1e} m)"
+        for index, (name, solution) in enumerate(zip(self.names, self.solutions)):
             tip = solution.tip_position * 1e3
             flag = "" if solution.converged else "  NOT CONVERGED"
-            lines.append(f"  {name:<24} tip [mm] {tip[0]:+8.3f} {tip[1]:+8.3f} {tip[2]:+8.3f}{flag}")
+            extra = ""
+            if self.openings and self.openings[index] is not None:
+                extra += f"  opening {self.openings[index] * 1e3:6.2f} mm"
+            for pose in (self.objects[index] if self.objects else {}).values():
+                c = pose.center * 1e3
+                extra += f"  {pose.name} {'held' if pose.held else 'rests'} at {c[0]:+.1f} {c[1]:+.1f} {c[2]:+.1f}"
+            lines.append(f"  {name:<28} tip [mm] {tip[0]:+8.3f} {tip[1]:+8.3f} {tip[2]:+8.3f}  "
+                         f"yaw {tip_yaw(solution):+7.2f} deg{extra}{flag}")
+        lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
 
-def run_sequence(sim, steps=None, frames_per_step=0, progress=None):
+def tip_yaw(solution):
+    """Rotation [deg] of the tip frame about the global z axis (its x axis's heading)."""
+    x_axis = solution.tip_rotation[:, 0]
+    return float(np.degrees(np.arctan2(x_axis[1], x_axis[0])))
+
+
+def run_sequence(sim, steps=None, frames_per_step=0, progress=None, check=False):
     """Solve ``steps`` (default the scenario's ``sequence:``) in order on ``sim``.
 
     ``frames_per_step``: also keep that many intermediate solutions of each transition (equal
-    steps in the continuation parameter), for animations. ``progress(fraction, text)``."""
+    steps in the continuation parameter), for animations. ``check``: solve every step by
+    shooting too (each shot started from the previous step's shooting solution, independent of
+    collocation) and compare. ``progress(fraction, text)``."""
     steps = steps if steps is not None else (sim.scenario.sequence or [])
     if not steps:
         raise ScenarioError("the scenario has no sequence: steps (a list of {name, set: {PATH: value}})")
     started = time.perf_counter()
     result = SequenceResult([], [])
+    tracker = ObjectTracker(sim.scenario, sim.robot)
     previous = sim.solve(method="collocation")
+    shot = sim.solve(method="shooting") if check else None
     for index, step in enumerate(steps):
         name, values = (step.name, step.set) if hasattr(step, "name") else (step["name"], step.get("set", {}))
         before = sim.params.copy()
@@ -82,11 +134,40 @@ def run_sequence(sim, steps=None, frames_per_step=0, progress=None):
         result.names.append(name)
         result.solutions.append(solution)
         result.transitions.append(transition)
+        result.transition_objects.append([tracker.poses_in(s) for _, s in transition])
+        _track_objects(result, tracker, solution, name)
+        if check:
+            shot = _check_step(sim, result, solution, shot)
         previous = solution if solution.converged else previous
         if progress is not None:
             progress((index + 1) / len(steps), name)
     result.total_time_s = time.perf_counter() - started
     return result
+
+
+def _track_objects(result, tracker, solution, name):
+    """Objects and gripper opening after a step; a warning when a grasp is not across the object."""
+    newly_held = [n for n in tracker.names if tracker.held_in(solution, n) and not tracker.poses[n].held]
+    result.objects.append(tracker.advance(solution, name))
+    result.openings.append(tracker.opening(solution, tracker.names[0]) if tracker.names else None)
+    for object_name in newly_held:
+        angle = tracker.grip_angle(solution, object_name)
+        if angle is not None and abs(angle - 90.0) > GRIP_ANGLE_TOLERANCE:
+            result.warnings.append(f"step {name!r}: the gripper closes on {object_name!r} at {angle:.1f} deg "
+                                   f"to its long axis, not across it (90 deg)")
+
+
+def _check_step(sim, result, solution, shot):
+    """Shooting at this step's parameters from the previous shooting solution; the comparison."""
+    shooting = sim.solver("shooting")
+    shooting.sample_s = [m.s for m in solution.modules]
+    other = shooting.solve(sim.params, initial=shot if shot is not None and shot.converged else None)
+    if not other.converged:
+        result.warnings.append(f"step {result.names[-1]!r}: shooting did not converge from the previous "
+                               "step's shooting solution; started it from this step's collocation solution")
+        other = shooting.solve(sim.params, initial=solution)
+    result.checks.append(compare_solutions(solution, other))
+    return other
 
 
 def _solve_step(sim, before, previous, frames):

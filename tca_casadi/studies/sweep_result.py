@@ -111,9 +111,9 @@ class SweepResult:
 
 
 def bending_angle(solution):
-    """Angle [rad] between the base tangent (first module) and the tip tangent (last module)."""
+    """Angle [rad] between the base tangent (first module) and the tip tangent."""
     base = solution.modules[0].R[:, 2, 0]
-    tip = solution.modules[-1].R[:, 2, -1]
+    tip = solution.tip_rotation[:, 2]
     return float(np.arctan2(np.linalg.norm(np.cross(base, tip)), base @ tip))
 
 

@@ -25,7 +25,9 @@ def assert_same(a, b, position=1e-9, tension=1e-8):
     largest = max([abs(x.tension) for x in a.actuators.values()] + [1e-12])
     for key, actuator in a.actuators.items():
         floor = max(abs(actuator.tension), 1e-6 * largest)
-        assert abs(b.actuators[key].tension - actuator.tension) <= tension * floor
+        # + 1e-11 N: both stop at scaled residual 1e-10, tensions scaled by EI/L^2 (8 mN on the
+        # arm's fingers), so a 0.25 mN tension may differ by a few 1e-12 N
+        assert abs(b.actuators[key].tension - actuator.tension) <= tension * floor + 1e-11
 
 
 @pytest.mark.parametrize("path", SHIPPED, ids=[p.stem for p in SHIPPED])

@@ -66,3 +66,48 @@ def test_missing_sequence_and_bad_paths_are_named(tmp_path, capsys):
     assert "no sequence" in capsys.readouterr().err
     with pytest.raises(ScenarioError, match="tca7"):
         run_sequence(Simulation.from_file(BENDING), steps=[{"name": "bad", "set": {"bending.tca7.temperature": 50}}])
+
+
+def small_gripper():
+    """A short hanging trunk with two pre-curved fingers (a tree) and heated-to-open TCAs."""
+    from builders import robot, rod, tca
+    fingers = [rod(name, "20 mm", [dict(tca("t", angle, 25), tension_only=True)], parent="trunk",
+                   precurvature=[0, curl, 0],
+                   connector={"offset": [0, 0, 0.002], "rotation": {"axis": [0, 1, 0], "angle": tilt}})
+               for name, angle, curl, tilt in (("fa", "0 deg", "-100 1/m", "90 deg"),
+                                               ("fb", "180 deg", "100 1/m", "-90 deg"))]
+    return robot([rod("trunk", "20 mm")] + fingers)
+
+
+def test_pick_and_place_command_checks_every_step_and_moves_the_object(tmp_path, capsys):
+    import yaml
+    scenario = small_gripper()
+    rest = Simulation.from_file(scenario).solve()
+    grasp = (rest.modules[1].tip_position + rest.modules[2].tip_position) / 2
+    scenario["objects"] = [{"name": "cube", "mass": "0.2 g", "size": ["4 mm"] * 3,
+                            "position": (grasp - [0, 0, 0.005]).tolist(), "held_by": ["fa", "fb"]}]
+    heat = {"fa.t.temperature": 100, "fb.t.temperature": 100}
+    cool = {"fa.t.temperature": 25, "fb.t.temperature": 25}
+    scenario["sequence"] = [{"name": "open", "set": heat},
+                            {"name": "lower and close", "set": dict(cool, **{"base.position": [0, 0, "-5 mm"],
+                                                                             "cube.held": True})},
+                            {"name": "lift and swing", "set": {"base.position": ["8 mm", 0, 0]}},
+                            {"name": "release", "set": dict(heat, **{"cube.held": False})}]
+    path = tmp_path / "gripper.yaml"
+    path.write_text(yaml.safe_dump(scenario))
+    assert main(["sequence", str(path), "-o", str(tmp_path), "--frames", "1", "--check", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "shooting AGREES on every step" in out
+    with (tmp_path / "sequence.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    opening = [float(r["gripper_opening [m]"]) for r in rows]
+    assert opening[0] > opening[1] + 5e-3 and opening[3] > opening[2] + 5e-3   # heated opens, cooled closes
+    assert [int(r["cube.held"]) for r in rows] == [0, 1, 1, 0]
+    assert float(rows[3]["cube.x [m]"]) == pytest.approx(0.008, abs=1e-4)      # put down 8 mm away
+    assert float(rows[3]["cube.z [m]"]) == pytest.approx(scenario["objects"][0]["position"][2])
+    for row in rows:
+        assert float(row["shooting_centerline_difference [m]"]) < 1e-7
+    import json
+    checks = json.loads((tmp_path / "sequence_check.json").read_text())
+    assert all(report["agree"] for report in checks.values()) and len(checks) == 4
+    assert len(list(tmp_path.glob("step_*.png"))) == 4 and (tmp_path / "sequence.gif").exists()

@@ -1,0 +1,140 @@
+"""Objects a robot picks and places (``objects:`` in a scenario): where each one is at each step
+of a sequence.
+
+An object rests at its scenario pose until its ``held`` parameter is set. From then on it is
+carried: its centre is the grasp point (the mean of its holders' tips) and it turns with the
+holders' common parent (the gripper's base frame). Picking is checked: the grasp point must lie
+inside the object's box when the holders close on it. When ``held`` is cleared the object is put
+down on its support plane (the height it rested at) below the grasp point, keeping only its
+rotation about the vertical. Falling and contact forces are not simulated.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ScenarioError
+
+#: margin [m] around an object's box within which a grasp point still counts as on the object
+GRASP_MARGIN = 0.5e-3
+
+
+@dataclass
+class ObjectPose:
+    """An object's box: ``center`` (3,) [m], ``rotation`` (3, 3) object-to-global, ``size``
+    (3,) edge lengths [m], ``held``."""
+    name: str
+    size: np.ndarray
+    center: np.ndarray
+    rotation: np.ndarray
+    held: bool
+
+    def corners(self):
+        """The 8 corners (3, 8) [m], global frame."""
+        signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]).T
+        return self.center[:, None] + self.rotation @ (signs * self.size[:, None] / 2)
+
+    def edges(self):
+        """The 12 edges as pairs of corner indices."""
+        return [(a, b) for a in range(8) for b in range(a + 1, 8) if bin(a ^ b).count("1") == 1]
+
+    def contains(self, point, margin=GRASP_MARGIN):
+        local = self.rotation.T @ (np.asarray(point) - self.center)
+        return bool(np.all(np.abs(local) <= self.size / 2 + margin))
+
+
+def _yaw_rotation(angle):
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+class ObjectTracker:
+    """Follows the scenario's objects through the solutions of a sequence (:meth:`advance`)."""
+
+    def __init__(self, scenario, robot):
+        index = {m.name: k for k, m in enumerate(scenario.modules)}
+        self.robot = robot
+        self.holders = {o.name: [index[h] for h in o.held_by] for o in scenario.objects}
+        self.poses = {o.name: ObjectPose(o.name, np.array(o.size), np.array(o.position), _yaw_rotation(o.yaw), False)
+                      for o in scenario.objects}
+        self.support = {o.name: float(o.position[2]) for o in scenario.objects}
+        self._relative = {}            # name -> object rotation in the carrier's tip frame
+
+    @property
+    def names(self):
+        return list(self.poses)
+
+    # ------------------------------------------------------------------ geometry of a solution
+    def grasp_point(self, solution, name):
+        """Mean of the holders' tip positions [m]."""
+        return np.mean([solution.modules[m].tip_position for m in self.holders[name]], axis=0)
+
+    def opening(self, solution, name):
+        """Distance between the first two holders' tips [m] (None with a single holder)."""
+        holders = self.holders[name]
+        if len(holders) < 2:
+            return None
+        return float(np.linalg.norm(solution.modules[holders[0]].tip_position
+                                    - solution.modules[holders[1]].tip_position))
+
+    def carrier_rotation(self, solution, name):
+        """Rotation of the frame a held object turns with: the holders' common parent's tip
+        (the gripper base), else the first holder's tip."""
+        parents = {self.robot.modules[m].parent for m in self.holders[name]}
+        carrier = parents.pop() if len(parents) == 1 and None not in parents else self.holders[name][0]
+        return solution.modules[carrier].tip_rotation
+
+    def held_in(self, solution, name):
+        """Whether ``solution``'s parameters hold the object (``NAME.held`` >= 1/2)."""
+        return bool(solution.parameters[solution.parameter_names[f"{name}.held"]][0] >= 0.5)
+
+    # ------------------------------------------------------------------ stepping
+    def poses_in(self, solution):
+        """Poses drawn for ``solution`` with the current attachments (no state change): carried
+        objects follow the grasp point, the others stay where they are."""
+        out = {}
+        for name, pose in self.poses.items():
+            if pose.held:
+                rotation = self.carrier_rotation(solution, name) @ self._relative[name]
+                out[name] = ObjectPose(name, pose.size, self.grasp_point(solution, name), rotation, True)
+            else:
+                out[name] = pose
+        return out
+
+    def advance(self, solution, step_name):
+        """Update every object after a step's ``solution``: pick (checked), carry, or put down.
+        Raises ScenarioError when a step holds an object its holders do not close on."""
+        for name, pose in list(self.poses.items()):
+            holding = self.held_in(solution, name)
+            grasp = self.grasp_point(solution, name)
+            if holding and not pose.held:
+                if not pose.contains(grasp):
+                    local = pose.rotation.T @ (grasp - pose.center)
+                    raise ScenarioError(
+                        f"step {step_name!r}: holds {name!r} but the grasp point is "
+                        f"{np.linalg.norm(local) * 1e3:.2f} mm from its centre, outside its "
+                        f"{' x '.join(f'{e * 1e3:g}' for e in pose.size)} mm box (offset in the "
+                        f"object's frame {np.round(local * 1e3, 2).tolist()} mm)")
+                self._relative[name] = self.carrier_rotation(solution, name).T @ pose.rotation
+                pose = ObjectPose(name, pose.size, pose.center, pose.rotation, True)
+            if holding:
+                rotation = self.carrier_rotation(solution, name) @ self._relative[name]
+                pose = ObjectPose(name, pose.size, grasp, rotation, True)
+            elif pose.held:
+                axis = pose.rotation[:, 0]
+                yaw = np.arctan2(axis[1], axis[0])
+                pose = ObjectPose(name, pose.size, np.array([grasp[0], grasp[1], self.support[name]]),
+                                  _yaw_rotation(yaw), False)
+            self.poses[name] = pose
+        return dict(self.poses)
+
+    def grip_angle(self, solution, name):
+        """Angle [deg] between the holders' closing direction (tip to tip) and the object's
+        long axis: 90 when the gripper pinches across the object."""
+        holders = self.holders[name]
+        if len(holders) < 2:
+            return None
+        across = solution.modules[holders[0]].tip_position - solution.modules[holders[1]].tip_position
+        pose = self.poses[name]
+        long_axis = pose.rotation[:, int(np.argmax(pose.size))]
+        cosine = abs(across @ long_axis) / max(np.linalg.norm(across), 1e-15)
+        return float(np.degrees(np.arccos(min(1.0, cosine))))
