@@ -61,6 +61,7 @@ class DistributedLoadModel:
     module: int
     span: tuple
     frame: str
+    kind: str = "distributed"
 
 
 @dataclass
@@ -140,6 +141,10 @@ class Robot:
         """Indices of the modules whose base sits on module m's tip, in scenario order."""
         return [c for c, module in enumerate(self.modules) if module.parent == m]
 
+    def coupled_children(self, m):
+        """Children of module m that pass their whole base wrench on (not decoupled)."""
+        return [c for c in self.children(m) if not self.modules[c].decoupled]
+
     @property
     def tip_index(self):
         """The module whose tip is "the tip": the end of the trunk, followed from the base while a
@@ -147,7 +152,7 @@ class Robot:
         carries a tree's fingers or a decoupled gripper)."""
         m = 0
         while True:
-            coupled = [c for c in self.children(m) if not self.modules[c].decoupled]
+            coupled = self.coupled_children(m)
             if len(coupled) != 1:
                 return m
             m = coupled[0]
@@ -318,7 +323,7 @@ def _parameters(scenario, actuators, point_loads, distributed):
         put(f"{item.name}.mass", item.mass)
         put(f"{item.name}.held", float(item.held))
     for load in point_loads + distributed:
-        if getattr(load, "kind", None) == "object":
+        if load.kind == "object":
             continue
         config = loads[load.name]
         if config.kind == "mass":

@@ -271,8 +271,7 @@ def free_starts(robot):
     parent's tip balance)."""
     out = [0]
     for m, module in enumerate(robot.modules[1:], start=1):
-        coupled = [c for c in robot.children(module.parent) if not robot.modules[c].decoupled]
-        if module.decoupled or coupled[0] != m:
+        if module.decoupled or robot.coupled_children(module.parent)[0] != m:
             out.append(m)
     return out
 

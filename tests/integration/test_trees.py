@@ -1,12 +1,11 @@
 """Trees (several fingers on one parent) and decoupled modules (SPEC section 5), checked against
 mirror symmetry, an equivalent chain, statics, an independent solve and the shooting solver."""
-import copy
-
 import numpy as np
 import pytest
 
 from builders import robot, rod, tca
 from tca_casadi import Simulation
+from tca_casadi.model.rotations import matrix_to_quaternion
 from tca_casadi.studies.compare import check
 
 UPRIGHT = {"position": [0, 0, 0], "orientation": {"quaternion": [1, 0, 0, 0]}}
@@ -99,7 +98,6 @@ def test_decoupled_module_loads_its_parent_with_its_weight_only():
     alone["modules"][0].pop("decoupled")
     R = arm.modules[1].tip_rotation
     position = arm.modules[1].tip_position + R @ [0, 0, 0.001]
-    from tca_casadi.model.rotations import matrix_to_quaternion
     alone["base"] = {"position": position.tolist(),
                      "orientation": {"quaternion": matrix_to_quaternion(R).tolist()}}
     solo = Simulation.from_file(alone).solve().raise_if_failed()
@@ -130,7 +128,7 @@ def test_parent_errors_name_the_key():
     later["modules"][1]["parent"] = "right"
     with pytest.raises(ScenarioError, match="must come before"):
         Simulation.from_file(later)
-    first = copy.deepcopy(y_tree())
+    first = y_tree()
     first["modules"][0]["decoupled"] = True
     with pytest.raises(ScenarioError, match="no parent"):
         Simulation.from_file(first)
