@@ -29,3 +29,8 @@ class SolverError(TcaError):
 
 class PhysicsWarning(UserWarning):
     """A converged result that leaves the model's range (compression, fit range, slack)."""
+
+
+class OutputError(ScenarioError):
+    """Results cannot be written where asked (not a directory, not writable). Raised before any
+    computing, and treated like bad input (exit code 2)."""

@@ -3,7 +3,6 @@
 Arrays are shaped ``(3, n)`` (rotations ``(3, 3, n)``), SI units, global frame unless named
 ``*_body``. The JSON keys follow SPEC section 8.
 """
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
@@ -29,6 +28,7 @@ class ModuleResult:
     moment: np.ndarray        # (3, n) [N m] internal moment, global frame
     base_reaction: dict       # {'force': (3,), 'moment': (3,)} on the module's base, global frame
     outline: np.ndarray = None  # (3, k) body-frame outline of the body's cross-section [m]
+    weights: np.ndarray = None  # (n,) [m] quadrature weights of the solver: integral f ds = weights @ f
 
     @property
     def tip_position(self):
@@ -95,6 +95,8 @@ class Solution:
     raw: dict = field(default_factory=dict, repr=False)
     scenario_name: str = ""
     tip_module: int = -1      # index of the module whose tip is "the tip" (Robot.tip_index)
+    balance: Optional[object] = None   # model.balance.GlobalBalance of the whole robot
+    loads: list = field(default_factory=list)   # point loads and masses: {name, kind, position, force}
 
     # ------------------------------------------------------------------ tip
     @property
@@ -140,17 +142,19 @@ class Solution:
             "parameters": ({name: np.atleast_1d(self.parameters[sl]).tolist()
                             for name, sl in self.parameter_names.items()}
                            if self.parameter_names is not None else {}),
+            "global_balance": self.balance.as_dict() if self.balance is not None else None,
             "warnings": list(self.warnings),
         }
 
     def save(self, directory):
         """Write ``solution.json`` and ``arrays.npz`` into ``directory``; return their paths."""
+        from .output import atomic_path, write_json
         directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
-        json_path = directory / "solution.json"
-        json_path.write_text(json.dumps(self.to_dict(), indent=2))
+        json_path = write_json(directory / "solution.json", self.to_dict())
         npz_path = directory / "arrays.npz"
-        np.savez(npz_path, **self.arrays())
+        with atomic_path(npz_path) as temporary, open(temporary, "wb") as stream:
+            np.savez(stream, **self.arrays())
         return json_path, npz_path
 
     def arrays(self):
@@ -180,7 +184,7 @@ class Solution:
             slack = f"{a.slack_length * 1e3:12.4f}" if a.slack_length is not None else f"{'-':>12}"
             lines.append(f"  {key:<22}{temp}{pull}{a.tension * 1e3:11.4f}{a.stroke * 1e3:13.4f}{free}{slack}")
         lines += [f"  warning: {w}" for w in self.warnings]
-        if not self.converged:
+        if not self.converged and not any(w.startswith("not converged") for w in self.warnings):
             lines.append(f"  message: {self.message}")
         return "\n".join(lines)
 

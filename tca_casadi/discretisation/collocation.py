@@ -259,6 +259,13 @@ class CollocationNLP:
         """Arc length of every node of module m, shape (n_intervals, d+1)."""
         return self.meshes[m].node_s(self.scheme)
 
+    def node_weights(self, m):
+        """Quadrature weights [m] of every node of module m and of its end (n_int (d+1) + 1,):
+        the scheme's weights on the collocation points, zero at interval starts and at the end."""
+        steps = np.diff(np.array(self.meshes[m].intervals), axis=1).ravel()
+        weights = np.hstack([np.zeros((steps.size, 1)), steps[:, None] * self.scheme.weights[None, :]])
+        return np.append(weights.ravel(), 0.0)
+
 
 def _derivative_matrix(scheme, steps):
     """(n_int (d+1), n_int d): node values -> d/ds at the collocation points, per interval."""

@@ -18,14 +18,13 @@ def internal_wrench(module, state):
     return ca.DM(module.stiffness) * state[7:13]
 
 
-def anchor_wrench(module, actuator, s, state, tension):
-    """Wrench of an actuator's anchor at s: ``+[r x F t; F t]`` at its start (state just after s),
-    ``-[...]`` at its end (state just before s)."""
-    sign = 1.0 if abs(s - actuator.route.span[0]) <= 1e-12 * module.length else -1.0
+def tangent_wrench(module, actuator, s, state, tension):
+    """``[r x F t; F t]`` (body frame) of an actuator at s, ``t`` its unit tangent computed from
+    ``state`` (the state on one side of s)."""
     r, dr, _ = actuator.route.evaluate(s)
     u = state[7:10] + ca.DM(module.xi_star[0:3])
     v = state[10:13] + ca.DM(module.xi_star[3:6])
-    return sign * ANCHOR_WRENCH(u, v, r[:, 0], dr[:, 0], tension)
+    return ANCHOR_WRENCH(u, v, r[:, 0], dr[:, 0], tension)
 
 
 def point_load_wrench(load, h, param):
@@ -42,16 +41,32 @@ def point_load_wrench(load, h, param):
     return POINT_WRENCH(h, zero, zero, force, moment)
 
 
-def starting_anchors(robot, m, s):
-    """Actuators of module m whose span starts at s."""
-    module = robot.modules[m]
-    return [a for a in module.actuators if abs(a.route.span[0] - s) <= 1e-12 * module.length]
+def actuators_after(robot, m, s):
+    """Actuators of module m that pull at s with their tangent just after s: those starting at
+    s, and those running through s when the strains may jump there (:func:`strains_jump`)."""
+    module, tol = robot.modules[m], 1e-12 * robot.modules[m].length
+    starting = [a for a in module.actuators if abs(a.route.span[0] - s) <= tol]
+    if not starting and not _events_at(robot, m, s):
+        return []
+    return [a for a in module.actuators if a.route.span[0] - tol <= s < a.route.span[1] - tol]
 
 
-def ending_anchors(robot, m, s):
-    """Actuators of module m whose span ends at s."""
-    module = robot.modules[m]
-    return [a for a in module.actuators if abs(a.route.span[1] - s) <= 1e-12 * module.length]
+def actuators_before(robot, m, s):
+    """Actuators of module m that pull at s with their tangent just before s: those ending at s,
+    and those running through s when the strains may jump there."""
+    module, tol = robot.modules[m], 1e-12 * robot.modules[m].length
+    if not _events_at(robot, m, s):
+        return []
+    return [a for a in module.actuators if a.route.span[0] + tol < s <= a.route.span[1] + tol]
+
+
+def _events_at(robot, m, s):
+    """True where the strains may jump at s: an actuator is anchored there or a point load or
+    mass acts there. Elsewhere the strains are continuous, so running actuators have no
+    corner and are left out (that keeps the Jacobians sparse and the shots cheap)."""
+    module, tol = robot.modules[m], 1e-12 * robot.modules[m].length
+    return bool(loads_at(robot, m, s)) or any(
+        abs(a.route.span[0] - s) <= tol or abs(a.route.span[1] - s) <= tol for a in module.actuators)
 
 
 def loads_at(robot, m, s):
@@ -60,16 +75,23 @@ def loads_at(robot, m, s):
 
 
 def point_wrenches(robot, m, s, before, after, tension, param):
-    """Sum of the point wrenches applied at arc length s of module m, or ``None`` if none is:
-    anchors starting at s (with the state after s), anchors ending at s (the state before s),
-    point loads and masses. ``before``/``after`` may be None at the module's ends."""
+    """Sum of the point wrenches applied at arc length s of module m, or ``None`` if none is.
+
+    Each actuator present at s pulls the body with ``F (t+ - t-)`` at ``r(s)``, ``t-``/``t+`` its
+    unit tangent just before/after s and zero outside its span: ``+F t+`` where it starts (its
+    anchor), ``-F t-`` where it ends, and the corner force ``F (t+ - t-)`` where it runs through
+    a point at which the strains jump (a point load, another actuator's anchor). This is the
+    delta part of the distributed load ``F q = F R^T t'`` (SPEC section 3) at a jump of ``t``.
+    Point loads and masses are added. ``before``/``after`` (deviation states either side of s)
+    may be None at the module's ends.
+    """
     module, total = robot.modules[m], None
     if after is not None:
-        for actuator in starting_anchors(robot, m, s):
-            total = add(total, anchor_wrench(module, actuator, s, after, tension(actuator)))
+        for actuator in actuators_after(robot, m, s):
+            total = add(total, tangent_wrench(module, actuator, s, after, tension(actuator)))
     if before is not None:
-        for actuator in ending_anchors(robot, m, s):
-            total = add(total, anchor_wrench(module, actuator, s, before, tension(actuator)))
+        for actuator in actuators_before(robot, m, s):
+            total = add(total, -tangent_wrench(module, actuator, s, before, tension(actuator)))
     h = (after if after is not None else before)[H_]
     for load in loads_at(robot, m, s):
         total = add(total, point_load_wrench(load, h, param))

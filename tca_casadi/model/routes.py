@@ -5,7 +5,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 
 @dataclass(frozen=True)
@@ -31,6 +30,7 @@ def make_route(route, span):
     elif route.kind == "helix":
         params = {"radius": route.radius, "turns": route.turns, "phase": route.phase}
     else:
+        from scipy.interpolate import CubicSpline
         points = np.asarray(route.points, dtype=float)
         params = {"x": CubicSpline(points[:, 0], points[:, 1]),
                   "y": CubicSpline(points[:, 0], points[:, 2]),
@@ -65,3 +65,41 @@ def _curve(route, s):
 
 
 _EVALUATORS = {"straight": _straight, "helix": _helix, "curve": _curve}
+
+
+def route_expressions(route, s):
+    """``(r, r', r'')`` of ``route`` as CasADi expressions of the symbol ``s`` (3 each), equal to
+    :meth:`RouteGeometry.evaluate` inside the span (a curve: the same cubic pieces as scipy's
+    spline, selected by ``if_else`` on its knots)."""
+    import casadi as ca
+    zero = ca.SX.zeros(3)
+    if route.kind == "straight":
+        r, _, _ = route.evaluate(route.span[0])
+        return ca.DM(r[:, 0]), zero, zero
+    if route.kind == "helix":
+        s_a, s_b = route.span
+        rate = 2.0 * math.pi * route.params["turns"] / (s_b - s_a)
+        b = route.params["phase"] + rate * (s - s_a)
+        radius = route.params["radius"]
+        c, n = ca.cos(b), ca.sin(b)
+        return (radius * ca.vertcat(c, n, 0), radius * rate * ca.vertcat(-n, c, 0),
+                -radius * rate**2 * ca.vertcat(c, n, 0))
+    x = _piecewise_cubic(route.params["x"], s)
+    y = _piecewise_cubic(route.params["y"], s)
+    return tuple(ca.vertcat(x[k], y[k], 0) for k in range(3))
+
+
+def _piecewise_cubic(spline, s):
+    """Value and first two derivatives of a scipy ``CubicSpline`` as CasADi expressions."""
+    import casadi as ca
+    knots, coefficients = spline.x, spline.c          # c[k, i]: coefficient of (s - x_i)^(3-k)
+    values = [0, 0, 0]
+    for i in reversed(range(len(knots) - 1)):
+        t = s - knots[i]
+        c3, c2, c1, c0 = coefficients[:, i]
+        piece = (((c3 * t + c2) * t + c1) * t + c0, (3 * c3 * t + 2 * c2) * t + c1, 6 * c3 * t + 2 * c2)
+        if i == len(knots) - 2:
+            values = list(piece)
+        else:
+            values = [ca.if_else(s < knots[i + 1], p, v) for p, v in zip(piece, values)]
+    return values

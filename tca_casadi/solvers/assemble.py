@@ -2,16 +2,20 @@
 Shared by every solver so that all report the same quantities the same way."""
 import numpy as np
 
+from ..model.balance import global_balance, load_markers
 from ..model.compatibility import slack_length
 from ..model.rotations import ROTATION
 from ..solution import ActuatorResult, ModuleResult, Solution
 
 #: a TCA tension below this [N] counts as compression
 COMPRESSION_TOLERANCE = 1e-9
+#: a global balance residual above this (relative to the forces in play) is reported
+BALANCE_TOLERANCE = 1e-6
 
 
-def module_result(module, s, states, base_wrench_body):
-    """:class:`ModuleResult` from node states (13, n) at arc lengths s (n,)."""
+def module_result(module, s, states, base_wrench_body, weights):
+    """:class:`ModuleResult` from node states (13, n) at arc lengths s (n,) with the solver's
+    quadrature weights (n,) [m]."""
     n = states.shape[1]
     R = np.array(ROTATION.map(n)(states[3:7])).reshape(3, n, 3).transpose(0, 2, 1)   # (3, 3, n)
     wrench = module.stiffness[:, None] * (states[7:13] - module.xi_star[:, None])
@@ -20,7 +24,7 @@ def module_result(module, s, states, base_wrench_body):
     R0 = R[:, :, 0]
     reaction = {"force": -R0 @ base_wrench_body[3:6], "moment": -R0 @ base_wrench_body[0:3]}
     return ModuleResult(module.name, s, states[0:3], states[3:7], R, states[7:10], states[10:13],
-                        force, moment, reaction, section_outline(module.section))
+                        force, moment, reaction, section_outline(module.section), np.asarray(weights, float))
 
 
 def section_outline(section, points=48):
@@ -78,7 +82,7 @@ def physics_warnings(robot, actuators):
 
 
 def build_solution(robot, params, module_data, tensions, lengths, status):
-    """Solution from ``module_data = [(s, states, base_wrench_body), ...]``, tensions per
+    """Solution from ``module_data = [(s, states, base_wrench_body, weights), ...]``, tensions per
     actuator (list in ``robot.actuators`` order) and lengths; ``status`` holds converged,
     status, message, method, max_residual, iterations, solve_time_s, build_time_s, raw."""
     modules = [module_result(robot.modules[m], *data) for m, data in enumerate(module_data)]
@@ -88,8 +92,15 @@ def build_solution(robot, params, module_data, tensions, lengths, status):
         actuators[actuator.key] = actuator_result(actuator, modules[actuator.module], tensions[k],
                                                   lengths[k], parameter)
     warnings = physics_warnings(robot, actuators)
+    balance = global_balance(robot, modules, params, tensions)
+    if status["converged"] and balance.relative > BALANCE_TOLERANCE:
+        warnings.append(f"global balance off by {balance.relative:.1e} of the forces in play "
+                        f"(force {np.abs(balance.force).max():.2e} N, moment "
+                        f"{np.abs(balance.moment).max():.2e} N m): the mesh is too coarse for this "
+                        "robot; raise solver.intervals")
     if not status["converged"]:
         warnings.insert(0, f"not converged: {status['message']}")
     return Solution(modules=modules, actuators=actuators, warnings=warnings,
                     parameters=np.array(params, float), parameter_names=dict(robot.layout.slices),
-                    scenario_name=robot.name, tip_module=robot.tip_index, **status)
+                    scenario_name=robot.name, tip_module=robot.tip_index, balance=balance,
+                    loads=load_markers(robot, modules, params), **status)

@@ -103,9 +103,12 @@ class CollocationSolver:
 
     def evaluate(self, w, params, status):
         """A :class:`Solution` from scaled variables ``w`` found by another algorithm (e.g. the
-        pseudo-arclength corrector); ``status`` as in :func:`build_solution`, without ``raw``."""
+        pseudo-arclength corrector); ``status`` as in :func:`build_solution`, without ``raw``
+        (its ``max_residual``, if not a number, is evaluated at ``(w, params)``)."""
         status = dict(status, method=self.method, build_time_s=self.build_time_s,
                       raw={"w": np.asarray(w, float), "method": self.method})
+        if not np.isfinite(status.get("max_residual", np.nan)):
+            status["max_residual"] = self.max_residual(w, params)
         return self._assemble(np.asarray(w, float), np.asarray(params, float), status)
 
     def max_residual(self, w, params):
@@ -123,7 +126,7 @@ class CollocationSolver:
             s = nlp.node_s(m).ravel()
             states = np.hstack([states, ends[:, m:m + 1]]) + nlp.state_offset[m][:, None]
             s = np.append(s, self.robot.modules[m].length)
-            module_data.append((s, states, base[:, m]))
+            module_data.append((s, states, base[:, m], nlp.node_weights(m)))
         tensions = []
         for actuator in self.robot.actuators:
             if actuator.unknown_tension:

@@ -1,16 +1,23 @@
 """The shooting solver (SPEC section 6): an independent cross-check of collocation.
 
-Unknowns: the base strains (as deviations from xi*) of every module whose start is not fixed by
+Unknowns ``z``: the base strains (deviations from xi*) of every module whose start is not fixed by
 its parent's tip balance (the first module, each decoupled module, each finger of a tree after
-the first) and the unknown tensions.
-For a guess, the explicit equilibrium ``xi' = (K + A)^-1 (...)`` (paper eq. 25; obtained by solving
-the same CasADi rod residual that collocation imposes, which is linear in xi') is integrated
-module by module with ``scipy.integrate.solve_ivp`` (DOP853, tight tolerances), segment by segment
-between breakpoints, applying the wrench jumps at anchors, point loads and junctions (a small
-Newton solve where a jump depends on the strain after it). Residuals: the tip wrench of every
-module whose tip balance is not used to start a child, and every compatibility equation, solved
-by MINPACK's Powell dog-leg trust region (``hybr``).
-Only the discretisation differs from collocation: the physics Functions are the same.
+the first) and the unknown tensions. A *shot* integrates the explicit equilibrium
+``xi' = (K + A)^-1 (...)`` (paper eq. 25, obtained by solving the same CasADi rod residual that
+collocation imposes, which is linear in xi') module by module with ``scipy.integrate.solve_ivp``
+(DOP853, tight tolerances), segment by segment between breakpoints, applying the wrench jumps of
+:mod:`tca_casadi.model.boundary` at anchors, point loads and junctions. Residuals: the tip
+balance of every module whose tip balance does not start a child, and every compatibility
+equation, solved by MINPACK's Powell dog-leg trust region (``hybr``).
+
+Only the discretisation differs from collocation; the physics Functions are the same. What makes
+a shot cheap:
+
+* the right-hand side of each segment, routes included (as CasADi expressions of ``s``), is one
+  CasADi Function;
+* the shot's Jacobian ``dr/dz`` comes from the variational equations integrated alongside the
+  state, ``S' = (df/dy) S + (df/dF) dF/dz``, and from the CasADi Jacobians of every jump, junction
+  and residual (chain rule), so one integration per Newton iteration replaces one per unknown.
 """
 import logging
 import time
@@ -24,16 +31,18 @@ from ..discretisation.mesh import module_breakpoints
 from ..model import boundary
 from ..model.compatibility import compatibility
 from ..model.rod import STATE_SIZE, explicit_strain_rate, rod_equations
+from ..model.routes import route_expressions
 from .assemble import build_solution
+from .newton import _Buffered
 
 log = logging.getLogger(__name__)
 
 #: points per integration segment written to the solution's arrays
 OUTPUT_POINTS = 9
+#: Gauss-Legendre points per panel of a segment, for integrals over the solution (weights)
+GAUSS_POINTS = 8
 #: right-hand-side evaluations allowed per segment before a shot is abandoned
 RHS_BUDGET = 20000
-#: finite-difference step on the scaled unknowns
-FD_STEP = 1e-6
 
 
 class _ShotFailed(Exception):
@@ -44,14 +53,23 @@ class ShootingSolver:
     """Single shooting with scipy. ``solve(params, initial=None)`` -> :class:`Solution`."""
     method = "shooting"
 
-    def __init__(self, robot, options, rtol=1e-11, atol=1e-12):
+    def __init__(self, robot, options, rtol=1e-11, atol=1e-12, jacobian="variational"):
         start = time.perf_counter()
         self.robot, self.options = robot, options
         self.rtol, self.atol = rtol, atol
-        self._rhs = [_shooting_rhs(module) for module in robot.modules]
-        self._segments = [_segments(robot, m) for m in range(len(robot.modules))]
-        self._jumps = {}
+        #: "variational" (exact, one augmented shot) or "differences" (forward differences, one
+        #: shot per unknown: the previous method, kept for scripts/bench.py's comparison)
+        self.jacobian = jacobian
         self._free = free_starts(robot)
+        self._segments = [_segments(robot, m) for m in range(len(robot.modules))]
+        n_unknowns = 6 * len(self._free) + len(robot.unknowns)
+        self._rhs = [[_segment_rhs(module, [module.actuators[k] for k in active], n_unknowns)
+                      for _, _, active in self._segments[m]] for m, module in enumerate(robot.modules)]
+        self._jumps = [[_jump_function(robot, m, s0) for s0, _, _ in self._segments[m][1:]]
+                       for m in range(len(robot.modules))]
+        self._ends = [_end_function(robot, m, self._free) for m in range(len(robot.modules))]
+        self._compatibility = _compatibility_function(robot)
+        self._tension_map = _tension_map(robot)
         #: optional extra output arc lengths per module (e.g. another solver's nodes)
         self.sample_s = None
         self.build_time_s = time.perf_counter() - start
@@ -79,33 +97,34 @@ class ShootingSolver:
         """Solve at ``params`` from ``initial`` (a Solution of either method) or the reference."""
         params = np.asarray(params, dtype=float)
         z0 = self.initial_guess(initial)
+        scale = self._unknown_scale()
         start = time.perf_counter()
-        calls = [0]
+        shots = [0]
+        cache = {}
 
         # the unknown is the change from z0: MINPACK sizes its first trust region from |x|,
         # which must not be a tiny nonzero start value
-        def residual(change):
-            calls[0] += 1
-            try:
-                return self._shoot(z0 + change, params)[0]
-            except _ShotFailed:
-                return np.full(change.size, 1e6)   # a wild trial point: let the trust region shrink
+        def evaluate(change, derivatives):
+            key = (change.tobytes(), derivatives)
+            if key not in cache:
+                shots[0] += 1
+                try:
+                    cache[key] = self._shot(z0 + change, scale, params, derivatives)
+                except _ShotFailed:       # a wild trial point: let the trust region shrink
+                    cache[key] = (np.full(change.size, 1e6), np.eye(change.size))
+            return cache[key]
 
-        def jacobian(change):
-            """Forward differences on the order-one scaled unknowns (step 1e-6)."""
-            base = residual(change)
-            columns = []
-            for k in range(change.size):
-                step = np.zeros_like(change)
-                step[k] = FD_STEP
-                columns.append((residual(change + step) - base) / FD_STEP)
-            return np.column_stack(columns)
+        def differences(change, step=1e-6):
+            base = evaluate(change, False)[0]
+            return np.column_stack([(evaluate(change + step * e, False)[0] - base) / step
+                                    for e in np.eye(change.size)])
 
-        result = root(residual, np.zeros_like(z0), jac=jacobian, method="hybr",
+        jacobian = differences if self.jacobian == "differences" else (lambda c: evaluate(c, True)[1])
+        result = root(lambda c: evaluate(c, False)[0], np.zeros_like(z0), method="hybr", jac=jacobian,
                       options={"xtol": 1e-13, "maxfev": 50 * (z0.size + 1)})
         result.x = z0 + result.x
         try:
-            residual_value, trajectory = self._shoot(result.x, params)
+            residual_value, trajectory = self._trajectory(result.x, params)
         except _ShotFailed as exc:
             return self._failed(params, str(exc), time.perf_counter() - start)
         elapsed = time.perf_counter() - start
@@ -113,14 +132,26 @@ class ShootingSolver:
         worst = float(np.max(np.abs(residual_value))) if residual_value.size else 0.0
         tolerance = self.tolerance
         converged = bool(worst <= tolerance)
-        message = (f"scipy root (hybr): {result.message.strip()}; max scaled residual {worst:.2e} "
-                   f"(tolerance {tolerance:.0e}), {calls[0]} shots")
+        message = (f"scipy root (hybr, {self.jacobian} Jacobian): {result.message.strip()}; max scaled residual "
+                   f"{worst:.2e} (tolerance {tolerance:.0e}), {shots[0]} shots")
         status = {"converged": converged, "status": "success" if converged else "failure",
                   "message": message, "method": self.method, "max_residual": worst,
                   "iterations": int(result.nfev), "solve_time_s": elapsed,
                   "build_time_s": self.build_time_s, "raw": {"z": result.x, "method": self.method}}
-        module_data, tensions, lengths = trajectory
-        return build_solution(self.robot, params, module_data, tensions, lengths, status)
+        return build_solution(self.robot, params, *trajectory, status)
+
+    def evaluate(self, z, params, status):
+        """A :class:`Solution` of one shot from scaled unknowns ``z`` at ``params``; ``status``
+        as in :func:`build_solution` without ``raw`` (``max_residual`` is the shot's)."""
+        params = np.asarray(params, dtype=float)
+        try:
+            residual_value, trajectory = self._trajectory(np.asarray(z, float), params)
+        except _ShotFailed as exc:
+            return self._failed(params, str(exc), status.get("solve_time_s", 0.0))
+        worst = float(np.max(np.abs(residual_value))) if residual_value.size else 0.0
+        status = dict(status, max_residual=worst, method=self.method, build_time_s=self.build_time_s,
+                      raw={"z": np.asarray(z, float), "method": self.method})
+        return build_solution(self.robot, params, *trajectory, status)
 
     def _failed(self, params, message, elapsed):
         """A Solution-shaped failure carrying the reference shape's arrays; converged False."""
@@ -137,134 +168,165 @@ class ShootingSolver:
         return max(self.options.tolerance, 1e-9)
 
     # ------------------------------------------------------------------ one shot
-    def _shoot(self, z, params):
-        """Integrate the whole chain from unknowns z; return (residuals, trajectory)."""
-        robot = self.robot
-        unknowns = z * self._unknown_scale()
-        n_strain = 6 * len(self._free)
-        tensions = dict(zip([a.key for a in robot.unknowns], unknowns[n_strain:]))
-        tension = _tension_lookup(robot, params, tensions)
-        param = _param_lookup(robot, params)
-        guessed = {m: unknowns[6 * k:6 * k + 6] for k, m in enumerate(self._free)}
-        starts = {0: np.r_[params[robot.layout["base.position"]], params[robot.layout["base.quaternion"]],
-                           guessed[0]]}
-        module_data, lengths = [], np.zeros(len(robot.actuators))
-        residuals = []
-        for m, module in enumerate(robot.modules):
-            state = starts[m]
-            base_wrench = self._base_wrench(m, state, tension, param)
-            s_out, states, end, module_lengths = self._integrate(m, state, params, tension, param)
-            module_data.append((s_out, states + np.r_[np.zeros(7), module.xi_star][:, None], base_wrench))
-            for k, actuator in enumerate(module.actuators):
-                lengths[robot.actuators.index(actuator)] = module_lengths[k]
-            applied = boundary.point_wrenches(robot, m, module.length, end, None, tension, param)
-            balance = boundary.internal_wrench(module, end) - boundary.add(ca.DM.zeros(6), applied)
-            continued = None
-            for c in robot.children(m):
-                if c not in guessed:
-                    continued = c           # started below from what the others leave
-                    continue
-                position, quaternion = boundary.junction_pose(end, robot.modules[c])
-                starts[c] = np.r_[np.array(position).ravel(), np.array(quaternion).ravel(), guessed[c]]
-                balance = balance - boundary.child_wrench(
-                    end, robot.modules[c], self._base_wrench(c, starts[c], tension, param), param)
-            if continued is None:
-                residuals.append(_as_array(balance) * _wrench_scale(module))
-            else:
-                starts[continued] = self._junction(end, balance, continued, tension, param)
-        for actuator in robot.unknowns:
-            stroke = lengths[robot.actuators.index(actuator)] - actuator.reference_length
-            parameter = params[robot.layout[actuator.parameter]][0]
-            residuals.append([compatibility(actuator, stroke, tensions[actuator.key], parameter,
-                                            robot.modules[actuator.module].force_scale)])
-        all_tensions = [tension(a) for a in robot.actuators]
-        return np.concatenate([np.ravel(r) for r in residuals]), (module_data, all_tensions, lengths)
+    def _shot(self, z, scale, params, derivatives):
+        """Residuals at scaled unknowns ``z`` and, with ``derivatives``, their Jacobian
+        ``dr/dz`` (variational equations and the chain rule)."""
+        r, dr, _ = self._integrate_all(z * scale, params, derivatives, outputs=False)
+        return r, (dr * scale[None, :] if derivatives else None)
 
-    def _integrate(self, m, state, params, tension, param):
-        """Integrate module m from its base state; return output arc lengths, states (13, n),
-        the end state and the actuator lengths."""
+    def _trajectory(self, z, params):
+        """Residuals and ``(module_data, tensions, lengths)`` of the shot at scaled ``z``."""
+        r, _, trajectory = self._integrate_all(z * self._unknown_scale(), params, False, outputs=True)
+        return r, trajectory
+
+    def _integrate_all(self, unknowns, params, derivatives, outputs):
+        """One shot at physical unknowns: ``(residuals, d residuals / d unknowns or None,
+        trajectory or None)``. Every quantity is carried with its derivative ``D`` with respect
+        to the unknowns (``None`` when ``derivatives`` is off)."""
+        robot, n = self.robot, unknowns.size
+        T, F0 = self._tension_map
+        F0 = F0(params)
+        forces = F0 + T @ unknowns[6 * len(self._free):]
+        dF = np.hstack([np.zeros((T.shape[0], 6 * len(self._free))), T]) if derivatives else None
+        starts = {0: (np.r_[params[robot.layout["base.position"]], params[robot.layout["base.quaternion"]],
+                            unknowns[0:6]], _selection(n, range(0, 6), 7) if derivatives else None)}
+        residuals, jacobians = [], []
+        lengths = np.zeros(len(robot.actuators))
+        length_D = np.zeros((len(robot.actuators), n)) if derivatives else None
+        module_data = []
+        for m, module in enumerate(robot.modules):
+            x0, D0 = starts[m]
+            own = [robot.actuators.index(a) for a in module.actuators]
+            end, D_end, mod_lengths, D_lengths, data = self._integrate(m, x0, D0, forces, dF, params, outputs)
+            lengths[own] = mod_lengths
+            if derivatives:
+                length_D[own] = D_lengths
+            free_children = [c for c in robot.children(m) if c in self._free]
+            strains = [unknowns[6 * self._free.index(c):6 * self._free.index(c) + 6] for c in free_children]
+            values = self._ends[m](end, *strains, forces, params)
+            values = [np.array(v, float) for v in values]
+            count = 1 + len(free_children)           # main output, then each free child's start
+            mains, jac = values[:count], values[count:]
+            if derivatives:
+                # jac: for each output, d/d end, d/d each strain, d/d forces
+                per = 2 + len(free_children)
+                D_outs = []
+                for o in range(count):
+                    block = jac[o * per:(o + 1) * per]
+                    D = block[0] @ D_end + block[-1] @ dF
+                    for k, c in enumerate(free_children):
+                        cols = range(6 * self._free.index(c), 6 * self._free.index(c) + 6)
+                        D = D + block[1 + k] @ _selection(n, cols, 0)
+                    D_outs.append(D)
+            main = mains[0].ravel()
+            for k, c in enumerate(free_children):
+                starts[c] = (mains[1 + k].ravel(), D_outs[1 + k] if derivatives else None)
+            continued = _continued_child(robot, m, self._free)
+            if continued is None:
+                residuals.append(main)
+                if derivatives:
+                    jacobians.append(D_outs[0])
+            else:
+                starts[continued] = (main, D_outs[0] if derivatives else None)
+            if outputs:
+                module_data.append(data + (self._base_wrench(m, x0, forces, params),))
+        compat = [np.array(v, float) for v in self._compatibility(lengths, forces, params)]
+        residuals.append(compat[0].ravel())
+        if derivatives:
+            jacobians.append(compat[1] @ length_D + compat[2] @ dF)
+        r = np.concatenate(residuals)
+        dr = np.vstack(jacobians) if derivatives else None
+        trajectory = None
+        if outputs:
+            trajectory = ([(s, states, wrench, weights) for s, states, weights, wrench in module_data],
+                          list(forces), lengths)
+        return r, dr, trajectory
+
+    def _integrate(self, m, x0, D0, forces, dF, params, outputs):
+        """Integrate module m from its base state ``x0`` (with ``D0 = dx0/dz`` when derivatives
+        are on; ``forces`` and ``dF`` of every actuator). Returns the end state and its
+        derivative, the actuator lengths and their derivatives, and (with ``outputs``)
+        ``(s, states (13, n) with xi* added, weights)``."""
         module = self.robot.modules[m]
+        own = [self.robot.actuators.index(a) for a in module.actuators]
         scale = _state_scale(module)
         n_act = len(module.actuators)
-        y = np.r_[state / scale, np.zeros(n_act)]
-        outputs_s, outputs = [], []
+        size = STATE_SIZE + n_act
+        y = np.r_[x0 / scale, np.zeros(n_act)]
+        S = None if D0 is None else np.vstack([D0 / scale[:, None], np.zeros((n_act, D0.shape[1]))])
+        loads_of = _load_values(self.robot, m, params)
+        out_s, out_x, out_w = [], [], []
         for index, (s0, s1, active) in enumerate(self._segments[m]):
             if index > 0:
-                y[:STATE_SIZE] = self._interior_jump(m, s0, y[:STATE_SIZE] * scale, tension, param) / scale
-            loads = _distributed_loads(self.robot, m, 0.5 * (s0 + s1), param)
-            forces = np.array([tension(a) for a in module.actuators]) * active
-            rhs = self._rhs[m]
-
+                y, S = self._jump(m, index - 1, y, S, scale, forces, dF, params)
+            rhs = self._rhs[m][index]
+            columns = [own[k] for k in active]
+            F_act, dF_act = forces[columns], (None if dF is None else dF[columns].ravel(order="F"))
+            loads = loads_of(0.5 * (s0 + s1))
             budget = [RHS_BUDGET]
 
-            def derivative(s, y_scaled, active=active, forces=forces, loads=loads, budget=budget):
+            def derivative(s, state, rhs=rhs, F_act=F_act, dF_act=dF_act, loads=loads, budget=budget):
                 budget[0] -= 1
-                if budget[0] < 0 or not np.all(np.isfinite(y_scaled)):
+                if budget[0] < 0 or not np.all(np.isfinite(state)):
                     raise _ShotFailed(f"integration of module {module.name} did not finish "
                                       f"(state too far from equilibrium)")
-                routes = _route_data(module, s, active)
-                rate, speed = rhs(y_scaled[:STATE_SIZE] * scale, routes, forces, *loads)
-                return np.r_[np.array(rate).ravel() / scale, np.array(speed).ravel() * active / module.length]
+                if dF_act is None:
+                    return rhs.value(s, state, F_act, loads).copy()
+                return rhs.augmented(s, state, F_act, dF_act, loads).copy()
 
-            grid = np.linspace(s0, s1, OUTPUT_POINTS)
-            if self.sample_s is not None:
-                extra = np.asarray(self.sample_s[m], float)
-                grid = np.unique(np.r_[grid, extra[(extra > s0) & (extra < s1)]])
-            sol = solve_ivp(derivative, (s0, s1), y, method="DOP853", t_eval=grid,
-                            rtol=self.rtol, atol=self.atol)
+            grid = None
+            if outputs:
+                extra = None if self.sample_s is None else np.asarray(self.sample_s[m], float)
+                grid, weights = segment_grid(s0, s1, extra, _panels(module, s1 - s0))
+            state0 = y if S is None else np.r_[y, S.ravel(order="F")]
+            sol = solve_ivp(derivative, (s0, s1), state0, method="DOP853", t_eval=grid,
+                            rtol=self.rtol, atol=self._atol(size, S))
             if not sol.success:
                 raise _ShotFailed(f"integration failed in module {module.name}: {sol.message}")
-            y = sol.y[:, -1].copy()
-            outputs_s.append(sol.t)
-            outputs.append(sol.y[:STATE_SIZE] * scale[:, None])
+            final = sol.y[:, -1]
+            y = final[:size].copy()
+            S = None if S is None else final[size:].reshape(size, -1, order="F").copy()
+            if outputs:
+                out_s.append(sol.t)
+                out_x.append(sol.y[:STATE_SIZE] * scale[:, None] + np.r_[np.zeros(7), module.xi_star][:, None])
+                out_w.append(weights)
         end = y[:STATE_SIZE] * scale
-        return np.concatenate(outputs_s), np.hstack(outputs), end, y[STATE_SIZE:] * module.length
+        D_end = None if S is None else S[:STATE_SIZE] * scale[:, None]
+        lengths = y[STATE_SIZE:] * module.length
+        D_lengths = None if S is None else S[STATE_SIZE:] * module.length
+        data = (np.concatenate(out_s), np.hstack(out_x), np.concatenate(out_w)) if outputs else None
+        return end, D_end, lengths, D_lengths, data
 
-    # ------------------------------------------------------------------ jumps
-    def _interior_jump(self, m, s, before, tension, param):
-        """State after breakpoint s: ``K (xi+ - xi-) + point wrenches = 0``."""
-        module = self.robot.modules[m]
-        rest = boundary.point_wrenches(self.robot, m, s, before, None, tension, param)
-        target = _as_array(boundary.add(boundary.internal_wrench(module, before),
-                                        None if rest is None else -rest))
-        after = before.copy()
-        after[7:13] = self._solve_start(m, s, target, before[3:7], tension, param)
-        return after
+    def _atol(self, size, S):
+        """Absolute tolerances: the state's, and a looser one on the sensitivities (the
+        Jacobian only steers the root finder; the residual is integrated to full accuracy)."""
+        if S is None:
+            return self.atol
+        return np.r_[np.full(size, self.atol), np.full(S.size, 1e-8)]
 
-    def _base_wrench(self, m, state, tension, param):
+    def _jump(self, m, b, y, S, scale, forces, dF, params):
+        """Scaled state (and sensitivities) after the b-th interior breakpoint of module m."""
+        x_before = y[:STATE_SIZE] * scale
+        jump = self._jumps[m][b]
+        values = jump(x_before, forces, params)
+        x_after = np.array(values[0], float).ravel()
+        y = np.r_[x_after / scale, y[STATE_SIZE:]]
+        if S is not None:
+            D_before = S[:STATE_SIZE] * scale[:, None]
+            D_after = np.array(values[1], float) @ D_before + np.array(values[2], float) @ dF
+            S = np.vstack([D_after / scale[:, None], S[STATE_SIZE:]])
+        return y, S
+
+    def _base_wrench(self, m, state, forces, params):
         """``W(0-)`` of module m: internal wrench at its start plus the point wrenches there."""
-        return _as_array(boundary.add(boundary.internal_wrench(self.robot.modules[m], state),
-                                      boundary.point_wrenches(self.robot, m, 0.0, None, state, tension, param)))
-
-    def _junction(self, end, balance, c, tension, param):
-        """Base state of the coupled child c whose base wrench must equal what the parent's tip
-        balance leaves (``balance``, parent tip frame; SPEC section 5)."""
-        robot, child = self.robot, self.robot.modules[c]
-        position, quaternion = boundary.junction_pose(end, child)
-        h = np.array(quaternion).ravel()
-        weight = boundary.connector_weight(end, child, param)
-        transmitted = boundary.untransmit(balance if weight is None else balance - weight, child)
-        start_state = np.r_[np.array(position).ravel(), h, np.zeros(6)]
-        loads = boundary.point_wrenches(robot, c, 0.0, start_state, None, tension, param)
-        target = _as_array(transmitted if loads is None else transmitted - loads)
-        start_state[7:13] = self._solve_start(c, 0.0, target, h, tension, param)
-        return start_state
-
-    def _solve_start(self, m, s, target, h, tension, param):
-        """Deviation strains after s solving ``K dxi + (anchors starting at s)(dxi) = target``."""
-        module = self.robot.modules[m]
-        starting = boundary.starting_anchors(self.robot, m, s)
-        guess = target / module.stiffness
-        if not starting:
-            return guess
-        key = (m, round(s / module.length, 12))
-        if key not in self._jumps:
-            self._jumps[key] = _start_jump_solver(module, s, starting)
-        forces = np.array([tension(a) for a in starting])
-        return np.array(self._jumps[key](guess, np.r_[target, h, forces])).ravel()
+        robot = self.robot
+        tension = lambda a: forces[robot.actuators.index(a)]      # noqa: E731
+        param = lambda name: params[robot.layout[name]]             # noqa: E731
+        return _as_array(boundary.add(boundary.internal_wrench(robot.modules[m], state),
+                                      boundary.point_wrenches(robot, m, 0.0, None, state, tension, param)))
 
 
-# ----------------------------------------------------------------------------- helpers
+# ----------------------------------------------------------------------------- building blocks
 def free_starts(robot):
     """Modules whose base strains are shooting unknowns: the first module, every decoupled module
     and every coupled child after the first of its parent (the first is started from the
@@ -276,73 +338,252 @@ def free_starts(robot):
     return out
 
 
-def _reference_trajectory(robot, params):
-    """``(module_data, tensions, lengths)`` of the unloaded reference shape (exact, no integration)."""
-    from .guess import reference_chain
-    samples = [np.linspace(0.0, module.length, OUTPUT_POINTS) for module in robot.modules]
-    module_data = [(s, states, np.zeros(6)) for s, states in zip(samples, reference_chain(robot, params, samples))]
-    return module_data, [0.0] * len(robot.actuators), [a.reference_length for a in robot.actuators]
+def _continued_child(robot, m, free):
+    """The child of m started from m's tip balance (at most one), else None."""
+    for c in robot.children(m):
+        if c not in free:
+            return c
+    return None
 
 
-def _shooting_rhs(module):
-    """CasADi Function ``(x, routes, F, loads...) -> (x', speed)`` of a module (deviation state)."""
-    equations = rod_equations(module.stiffness, module.xi_star, len(module.actuators))
-    rate = explicit_strain_rate(equations)
-    x = ca.SX.sym("x", STATE_SIZE)
-    routes = ca.SX.sym("routes", 9, len(module.actuators))
-    forces = ca.SX.sym("F", len(module.actuators))
-    loads = [ca.SX.sym(name, 3) for name in ("f_glob", "l_glob", "f_body", "l_body")]
-    dxi = rate(x, routes, forces, *loads)
-    kin, _, speed = equations(x, dxi, routes, forces, *loads)
-    return ca.Function("shooting_rhs", [x, routes, forces] + loads, [ca.vertcat(kin, dxi), speed])
+class _SegmentRhs:
+    """The explicit right-hand side of one segment (routes inside), evaluated through CasADi's
+    buffer API: ``value(s, y, F, loads) -> y'`` and, for the variational equations,
+    ``augmented(s, [y; vec S], F, dF, loads) -> [y'; vec(df/dy S + df/dF dF)]`` (column-major
+    ``vec``), with ``n_unknowns`` columns of S."""
+
+    def __init__(self, module, actuators, n_unknowns):
+        equations = rod_equations(module.stiffness, module.xi_star, len(actuators))
+        rate = explicit_strain_rate(equations)
+        scale = _state_scale(module)
+        s = ca.SX.sym("s")
+        y = ca.SX.sym("y", STATE_SIZE + len(module.actuators))
+        forces = ca.SX.sym("F", len(actuators))
+        loads = ca.SX.sym("loads", 12)
+        columns = [ca.vertcat(*route_expressions(a.route, s)) for a in actuators]
+        routes = ca.horzcat(*columns) if columns else ca.SX(9, 0)
+        x = y[:STATE_SIZE] * ca.DM(scale)
+        split = [loads[3 * k:3 * k + 3] for k in range(4)]
+        dxi = rate(x, routes, forces, *split)
+        kin, _, speed = equations(x, dxi, routes, forces, *split)
+        speeds = ca.SX.zeros(len(module.actuators))
+        for k, actuator in enumerate(actuators):
+            speeds[module.actuators.index(actuator)] = speed[k] / module.length
+        f = ca.vertcat(ca.vertcat(kin, dxi) / ca.DM(scale), speeds)
+        self._value = _Buffered(ca.Function("shooting_rhs", [s, y, forces, loads], [ca.densify(f)]))
+        S = ca.SX.sym("S", y.numel(), n_unknowns)
+        dF = ca.SX.sym("dF", len(actuators), n_unknowns)
+        rate = ca.jacobian(f, y) @ S + ca.jacobian(f, forces) @ dF
+        self._augmented = _Buffered(ca.Function("shooting_rhs_variational", [s, ca.vertcat(y, ca.vec(S)), forces,
+                                                                             ca.vec(dF), loads],
+                                                [ca.densify(ca.vertcat(f, ca.vec(rate)))]))
+
+    def value(self, s, y, forces, loads):
+        return self._value(s, y, forces, loads)[0]
+
+    def augmented(self, s, y, forces, dF, loads):
+        return self._augmented(s, y, forces, dF, loads)[0]
 
 
-def _start_jump_solver(module, s, starting):
-    """Newton rootfinder for the strain after a breakpoint where anchors start."""
-    delta = ca.SX.sym("delta", 6)
-    data = ca.SX.sym("data", 6 + 4 + len(starting))
-    target, h, forces = data[0:6], data[6:10], data[10:]
-    state = ca.vertcat(ca.SX.zeros(3), h, delta)
-    residual = boundary.internal_wrench(module, state) - target
-    for k, actuator in enumerate(starting):
-        residual += boundary.anchor_wrench(module, actuator, s, state, forces[k])
-    residual = residual / ca.DM(module.stiffness)
-    equation = ca.Function("jump", [delta, data], [residual])
-    return ca.rootfinder("jump_solver", "newton", equation, {"abstol": 1e-15, "max_iter": 50,
-                                                             "error_on_fail": True})
+def _segment_rhs(module, actuators, n_unknowns):
+    return _SegmentRhs(module, actuators, n_unknowns)
+
+
+def _symbols(robot):
+    """Symbolic tensions (all actuators) and parameters, with the lookups boundary.* expects."""
+    forces = ca.MX.sym("F", len(robot.actuators))
+    params = ca.MX.sym("P", robot.layout.size)
+    tension = lambda a: forces[robot.actuators.index(a)]          # noqa: E731
+    param = lambda name: params[robot.layout[name]]                 # noqa: E731
+    return forces, params, tension, param
+
+
+def _strains_after(robot, m, s, before_pose, target, tension, param):
+    """Deviation strains just after s solving ``K dxi + (point wrenches after s)(dxi) = target``
+    (a CasADi rootfinder when actuators pull there with the tangent after s; else explicit)."""
+    module = robot.modules[m]
+    stiffness = ca.DM(module.stiffness)
+    if not boundary.actuators_after(robot, m, s):
+        return target / stiffness
+    delta = ca.MX.sym("delta", 6)
+    data = ca.MX.sym("data", 7 + 6 + len(robot.actuators) + robot.layout.size)
+    forces = data[13:13 + len(robot.actuators)]
+    state = ca.vertcat(data[0:7], delta)
+    t = lambda a: forces[robot.actuators.index(a)]                 # noqa: E731
+    residual = stiffness * delta - data[7:13]
+    for actuator in boundary.actuators_after(robot, m, s):
+        residual += boundary.tangent_wrench(module, actuator, s, state, t(actuator))
+    solver = ca.rootfinder("jump_solver", "newton",
+                           ca.Function("jump", [delta, data], [residual / stiffness]),
+                           {"abstol": 1e-15, "max_iter": 50, "error_on_fail": False})
+    forces_all = ca.vertcat(*[tension(a) for a in robot.actuators]) if robot.actuators else ca.MX(0, 1)
+    params_all = ca.vertcat(*[param(name) for name in robot.layout.names()])
+    return solver(target / stiffness, ca.vertcat(before_pose, target, forces_all, params_all))
+
+
+def _jump_function(robot, m, s):
+    """Function ``(x_before, F, P) -> (x_after, dx_after/dx_before, dx_after/dF)`` at an
+    interior breakpoint s of module m: ``K (xi+ - xi-) + point wrenches = 0``."""
+    module = robot.modules[m]
+    x_before = ca.MX.sym("x", STATE_SIZE)
+    forces, params, tension, param = _symbols(robot)
+    rest = boundary.point_wrenches(robot, m, s, x_before, None, tension, param)
+    target = boundary.add(boundary.internal_wrench(module, x_before), None if rest is None else -rest)
+    strains = _strains_after(robot, m, s, x_before[0:7], target, tension, param)
+    x_after = ca.vertcat(x_before[0:7], strains)
+    return ca.Function(f"jump_{m}", [x_before, forces, params],
+                       [x_after, ca.jacobian(x_after, x_before), ca.jacobian(x_after, forces)])
+
+
+def _end_function(robot, m, free):
+    """Function ``(x_end, strains of each free child, F, P) -> (main, starts of the free children,
+    then the Jacobian blocks of each output: d/d x_end, d/d each strain, d/d F)``. ``main`` is
+    the scaled tip balance of module m, or the start state of its continued child."""
+    module = robot.modules[m]
+    end = ca.MX.sym("end", STATE_SIZE)
+    forces, params, tension, param = _symbols(robot)
+    children = [c for c in robot.children(m) if c in free]
+    strains = [ca.MX.sym(f"z{c}", 6) for c in children]
+    applied = boundary.point_wrenches(robot, m, module.length, end, None, tension, param)
+    balance = boundary.internal_wrench(module, end) - boundary.add(ca.MX.zeros(6), applied)
+    starts = []
+    for c, strain in zip(children, strains):
+        position, quaternion = boundary.junction_pose(end, robot.modules[c])
+        start = ca.vertcat(position, quaternion, strain)
+        starts.append(start)
+        base = boundary.add(boundary.internal_wrench(robot.modules[c], start),
+                            boundary.point_wrenches(robot, c, 0.0, None, start, tension, param))
+        balance = balance - boundary.child_wrench(end, robot.modules[c], base, param)
+    continued = _continued_child(robot, m, free)
+    if continued is None:
+        main = balance * ca.DM(_wrench_scale(module))
+    else:
+        main = _junction_start(robot, end, balance, continued, tension, param)
+    outputs = [main] + starts
+    inputs = [end] + strains + [forces]
+    jacobians = [ca.jacobian(out, given) for out in outputs for given in inputs]
+    return ca.Function(f"end_{m}", [end] + strains + [forces, params], outputs + jacobians)
+
+
+def _junction_start(robot, end, balance, c, tension, param):
+    """Base state of the coupled child c whose base wrench must equal what the parent's tip
+    balance leaves (``balance``, parent tip frame; SPEC section 5)."""
+    child = robot.modules[c]
+    position, quaternion = boundary.junction_pose(end, child)
+    weight = boundary.connector_weight(end, child, param)
+    transmitted = boundary.untransmit(balance if weight is None else balance - weight, child)
+    pose = ca.vertcat(position, quaternion)
+    state = ca.vertcat(pose, ca.MX.zeros(6))
+    loads = boundary.point_wrenches(robot, c, 0.0, state, None, tension, param)
+    target = transmitted if loads is None else transmitted - loads
+    return ca.vertcat(pose, _strains_after(robot, c, 0.0, pose, target, tension, param))
+
+
+def _compatibility_function(robot):
+    """Function ``(lengths, F, P) -> (residuals, d/d lengths, d/d F)`` of every unknown tension."""
+    lengths = ca.MX.sym("l", len(robot.actuators))
+    forces, params, tension, param = _symbols(robot)
+    out = []
+    for actuator in robot.unknowns:
+        k = robot.actuators.index(actuator)
+        out.append(compatibility(actuator, lengths[k] - actuator.reference_length, forces[k],
+                                 param(actuator.parameter)[0], robot.modules[actuator.module].force_scale))
+    r = ca.vertcat(*out) if out else ca.MX(0, 1)
+    return ca.Function("compatibility", [lengths, forces, params],
+                       [r, ca.jacobian(r, lengths), ca.jacobian(r, forces)])
+
+
+def _tension_map(robot):
+    """``(T, F0)``: every actuator's tension is ``F0(params) + T @ unknown tensions``."""
+    T = np.zeros((len(robot.actuators), len(robot.unknowns)))
+    known = []
+    for k, actuator in enumerate(robot.actuators):
+        if actuator.unknown_tension:
+            T[k, robot.unknowns.index(actuator)] = 1.0
+        else:
+            known.append((k, robot.layout[actuator.parameter]))
+
+    def F0(params):
+        out = np.zeros(len(robot.actuators))
+        for k, slot in known:
+            out[k] = params[slot][0]
+        return out
+    return T, F0
+
+
+def _load_values(robot, m, params):
+    """``loads(s_mid)`` -> (12,) distributed loads of a segment: global force (self-weight
+    included) and moment, body force and moment per length (:mod:`tca_casadi.model.boundary`
+    conventions), from the parameters."""
+    module = robot.modules[m]
+    value = lambda name: np.asarray(params[robot.layout[name]], float)      # noqa: E731
+
+    def loads(s_mid):
+        fields = [module.weight_density * value("gravity")] + [np.zeros(3) for _ in range(3)]
+        for load in robot.distributed_loads:
+            if load.module == m and load.span[0] < s_mid < load.span[1]:
+                first = 0 if load.frame == "global" else 2
+                fields[first] = fields[first] + value(f"{load.name}.force")
+                fields[first + 1] = fields[first + 1] + value(f"{load.name}.moment")
+        return np.concatenate(fields)
+    return loads
 
 
 def _segments(robot, m):
-    """``(s0, s1, active (nA,))`` between the module's breakpoints."""
+    """``(s0, s1, active)`` between the module's breakpoints, ``active`` the indices (within the
+    module) of the actuators running through the segment."""
     module = robot.modules[m]
     breaks = module_breakpoints(robot, m)
     out = []
     for s0, s1 in zip(breaks[:-1], breaks[1:]):
         mid = 0.5 * (s0 + s1)
-        active = np.array([a.route.span[0] < mid < a.route.span[1] for a in module.actuators], dtype=float)
+        active = [k for k, a in enumerate(module.actuators) if a.route.span[0] < mid < a.route.span[1]]
         out.append((s0, s1, active))
     return out
 
 
-def _route_data(module, s, active):
-    data = np.zeros((9, len(module.actuators)))
-    for k, actuator in enumerate(module.actuators):
-        if active[k]:
-            r, dr, ddr = actuator.route.evaluate(min(max(s, actuator.route.span[0]), actuator.route.span[1]))
-            data[:, k] = np.r_[r[:, 0], dr[:, 0], ddr[:, 0]]
-    return data
+def _panels(module, length):
+    """Quadrature panels over a segment of ``length``: one, plus four per helix turn that the
+    module's routes make over it (the centerline follows a helical route's wobble)."""
+    per_metre = sum(abs(a.route.params.get("turns", 0.0)) / (a.route.span[1] - a.route.span[0])
+                    for a in module.actuators)
+    return 1 + int(np.ceil(4 * per_metre * length))
 
 
-def _distributed_loads(robot, m, s_mid, param):
-    """Global force (self-weight included), global moment, body force, body moment per length."""
-    module = robot.modules[m]
-    fields = [module.weight_density * np.asarray(param("gravity"), float)] + [np.zeros(3) for _ in range(3)]
-    for load in robot.distributed_loads:
-        if load.module == m and load.span[0] < s_mid < load.span[1]:
-            first = 0 if load.frame == "global" else 2
-            fields[first] = fields[first] + param(f"{load.name}.force")
-            fields[first + 1] = fields[first + 1] + param(f"{load.name}.moment")
-    return fields
+def segment_grid(s0, s1, extra=None, panels=1):
+    """Output arc lengths of one integration segment and their quadrature weights [m]:
+    ``OUTPUT_POINTS`` equispaced points (ends included), ``GAUSS_POINTS`` Gauss-Legendre points
+    on each of ``panels`` equal panels carrying the weights (exact for polynomials of degree
+    ``2 GAUSS_POINTS - 1`` on each), and any ``extra`` points inside (weight zero)."""
+    nodes, gauss = np.polynomial.legendre.leggauss(GAUSS_POINTS)
+    edges = np.linspace(s0, s1, panels + 1)
+    half = np.diff(edges)[:, None] / 2
+    s = np.r_[np.linspace(s0, s1, OUTPUT_POINTS), (edges[:-1, None] + (nodes + 1) * half).ravel()]
+    w = np.r_[np.zeros(OUTPUT_POINTS), (gauss * half).ravel()]
+    if extra is not None:
+        inside = extra[(extra > s0) & (extra < s1)]
+        s, w = np.r_[s, inside], np.r_[w, np.zeros(inside.size)]
+    grid, inverse = np.unique(s, return_inverse=True)
+    return grid, np.bincount(inverse, weights=w, minlength=grid.size)
+
+
+def _reference_trajectory(robot, params):
+    """``(module_data, tensions, lengths)`` of the unloaded reference shape (exact, no integration)."""
+    from .guess import reference_chain
+    grids = [segment_grid(0.0, module.length) for module in robot.modules]
+    samples = [s for s, _ in grids]
+    module_data = [(s, states, np.zeros(6), w)
+                   for (s, w), states in zip(grids, reference_chain(robot, params, samples))]
+    return module_data, [0.0] * len(robot.actuators), [a.reference_length for a in robot.actuators]
+
+
+def _selection(n, columns, offset):
+    """(offset + len(columns), n) matrix selecting ``columns`` of the unknowns into the rows
+    after ``offset`` zero rows."""
+    columns = list(columns)
+    out = np.zeros((offset + len(columns), n))
+    out[offset + np.arange(len(columns)), columns] = 1.0
+    return out
 
 
 def _state_scale(module):
@@ -353,18 +594,6 @@ def _state_scale(module):
 
 def _wrench_scale(module):
     return np.r_[np.full(3, 1 / (module.force_scale * module.length)), np.full(3, 1 / module.force_scale)]
-
-
-def _tension_lookup(robot, params, unknown_tensions):
-    def tension(actuator):
-        if actuator.unknown_tension:
-            return unknown_tensions[actuator.key]
-        return float(params[robot.layout[actuator.parameter]][0])
-    return tension
-
-
-def _param_lookup(robot, params):
-    return lambda name: params[robot.layout[name]]
 
 
 def _as_array(value):

@@ -1,0 +1,101 @@
+"""Random valid robots (scenario dicts, as a user would write them) for property tests: 1-3
+modules in a chain or a tree, connectors, TCAs and tendons on straight, helical and spline routes
+over random spans (anchors inside other actuators' spans), point loads, masses and distributed
+loads in both frames, and gravity in any direction. Sizes are drawn so that the robot bends
+visibly but moderately (loads a fraction of each module's ``EI / L^2``)."""
+import math
+
+import numpy as np
+
+TCA_TYPE = {"fiber_radius": "0.3 mm", "coil_radius": "0.5 mm", "pitch_angle": "25 deg"}
+
+
+def random_robot(seed):
+    """A random valid scenario dict; the same ``seed`` gives the same robot."""
+    rng = np.random.default_rng(seed)
+    count = int(rng.integers(1, 4))
+    modules = [_module(rng, k, count) for k in range(count)]
+    loads = [load for k, module in enumerate(modules) for load in _loads(rng, module, k)]
+    direction = rng.normal(size=3)
+    return {"name": f"random_{seed}",
+            "gravity": (rng.uniform(0, 9.81) * direction / np.linalg.norm(direction)).tolist(),
+            "base": {"position": rng.uniform(-0.01, 0.01, 3).tolist(),
+                     "orientation": {"axis": rng.normal(size=3).tolist(), "angle": float(rng.uniform(0, math.pi))}},
+            "materials": {"soft": {"youngs_modulus": float(rng.uniform(0.1e6, 1e6)),
+                                   "poisson_ratio": float(rng.uniform(0.3, 0.5)),
+                                   "density": float(rng.uniform(1000, 1500))}},
+            "tca_types": {"nylon": TCA_TYPE},
+            "modules": [m["config"] for m in modules], "loads": loads}
+
+
+def _module(rng, k, count):
+    length = float(rng.uniform(0.02, 0.06))
+    diameter = float(rng.uniform(0.006, 0.012))
+    config = {"name": f"m{k}", "length": length, "material": "soft",
+              "cross_section": {"shape": "circle", "diameter": diameter}, "actuators": []}
+    if rng.random() < 0.3:
+        config["cross_section"] = {"shape": "rectangle", "width": diameter, "height": diameter * 0.8}
+        diameter *= 0.8
+    if k > 0:
+        if k == 2 and count == 3 and rng.random() < 0.5:
+            config["parent"] = "m0"                  # a tree: two children on m0
+        if rng.random() < 0.5:
+            config["connector"] = {"offset": (rng.uniform(-1, 1, 3) * 0.002).tolist(),
+                                   "rotation": {"axis": rng.normal(size=3).tolist(),
+                                                "angle": float(rng.uniform(-0.5, 0.5))},
+                                   "mass": float(rng.uniform(0, 0.002))}
+    modulus = 0.5e6                                   # order of the drawn moduli, for sizing
+    stiffness = modulus * math.pi * diameter**4 / 64
+    for a in range(int(rng.integers(1, 4))):
+        config["actuators"].append(_actuator(rng, a, length, diameter, stiffness))
+    return {"config": config, "length": length, "force": stiffness / length**2}
+
+
+def _actuator(rng, a, length, diameter, stiffness):
+    radius = float(rng.uniform(0.1, 0.4) * diameter)
+    span = sorted(rng.uniform(0, length, 2).tolist()) if rng.random() < 0.6 else None
+    if span is not None and span[1] - span[0] < 0.2 * length:
+        span = None
+    kind = rng.choice(["straight", "helix", "curve"], p=[0.5, 0.3, 0.2])
+    if kind == "straight":
+        route = {"kind": "straight", "radius": radius, "angle": float(rng.uniform(0, 2 * math.pi))}
+    elif kind == "helix":
+        route = {"kind": "helix", "radius": radius, "turns": float(rng.choice([-1, 1]) * rng.uniform(0.2, 1.5)),
+                 "phase": float(rng.uniform(0, 2 * math.pi))}
+    else:
+        s_a, s_b = span if span is not None else (0.0, length)
+        s = np.linspace(s_a, s_b, 4)
+        xy = rng.uniform(-1, 1, (4, 2)) * radius / math.sqrt(2)
+        route = {"kind": "curve", "points": np.column_stack([s, xy]).tolist()}
+        span = None                                   # a curve's span is its points' range
+    if span is not None:
+        route["span"] = span
+    if rng.random() < 0.4:
+        return {"name": f"t{a}", "kind": "tca", "type": "nylon", "route": route,
+                "temperature": float(rng.uniform(25, 70))}
+    tension = float(rng.uniform(0.05, 0.5) * stiffness / (length * max(radius, 1e-3)))
+    return {"name": f"t{a}", "kind": "tendon", "route": route, "tension": tension}
+
+
+def _loads(rng, module, k):
+    name, length, force = module["config"]["name"], module["length"], module["force"]
+    out = []
+    for j in range(int(rng.integers(0, 3))):
+        kind = rng.choice(["point", "mass", "distributed"])
+        label = f"{name}_{kind}{j}"
+        at = float(rng.uniform(0.1, 1.0) * length) if rng.random() < 0.7 else "end"
+        if kind == "point":
+            out.append({"name": label, "kind": "point", "module": name, "at": at,
+                        "force": (rng.normal(size=3) * 0.2 * force).tolist(),
+                        "moment": (rng.normal(size=3) * 0.05 * force * length).tolist(),
+                        "frame": str(rng.choice(["global", "body"]))})
+        elif kind == "mass":
+            out.append({"name": label, "kind": "mass", "module": name, "at": at,
+                        "mass": float(rng.uniform(0, 0.2 * force / 9.81))})
+        else:
+            span = sorted(rng.uniform(0, length, 2).tolist())
+            out.append({"name": label, "kind": "distributed", "module": name, "span": span,
+                        "force": (rng.normal(size=3) * 0.3 * force / length).tolist(),
+                        "moment": (rng.normal(size=3) * 0.05 * force).tolist(),
+                        "frame": str(rng.choice(["global", "body"]))})
+    return out
