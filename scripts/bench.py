@@ -11,13 +11,22 @@ where there is no TCA), by IPOPT and by Newton; a 101-step sweep 25 -> 125 degC 
 from forward solves at random temperatures); the shooting solver's cold solve; the tip error of
 each against a reference on a much finer mesh (64 intervals, degree 5); and the cold
 collocation time on the coarsest mesh at least as accurate as shooting (the speed ratio at
-equal accuracy).
+equal accuracy). Shooting is timed twice in the same run: with its exact Jacobian (variational
+equations, the default) and with forward differences (the method before), both on the CasADi
+right-hand sides.
+
+Also: the CLI's start-up (``tca-casadi --help`` and ``validate`` of the bending module, each a
+fresh process, median of 5) and ``tca-casadi check`` on every shipped scenario (collocation and
+shooting time, one run each).
 """
 import argparse
 import json
+import platform
 import statistics
+import subprocess
 import sys
 import time
+from datetime import date
 from pathlib import Path
 
 import numpy as np
@@ -102,6 +111,7 @@ def bench_problem(name, source, repeats, steps, shooting_repeats, inverse_querie
         row.update(bench_inverse(sim, inverse_queries))
     if shooting_repeats:
         row["shooting_s"], shot = median_time(lambda: sim.solve(method="shooting"), shooting_repeats)
+        row["shooting_differences_s"], _ = median_time(lambda: _shooting_by_differences(source), shooting_repeats)
         row["tip_error_shooting_m"] = float(np.linalg.norm(shot.tip_position - reference.tip_position))
         row["speedup_cold"] = row["shooting_s"] / row["cold_s"]
         row.update(equal_accuracy(source, reference, row["tip_error_shooting_m"], repeats))
@@ -123,6 +133,37 @@ def equal_accuracy(source, reference, shooting_error, repeats):
     seconds, _ = median_time(lambda: sim.solve(), repeats)
     return {"intervals_equal_accuracy": intervals, "tip_error_equal_accuracy_m": error,
             "cold_equal_accuracy_s": seconds}
+
+
+def _shooting_by_differences(source):
+    """A cold shooting solve with the forward-difference Jacobian (the previous method)."""
+    from tca_casadi.solvers import ShootingSolver
+    sim = Simulation.from_file(source)
+    sim._solvers["shooting"] = ShootingSolver(sim.robot, sim.scenario.solver, jacobian="differences")
+    return sim.solve(method="shooting")
+
+
+def startup(repeats=5):
+    """Median wall time [s] of ``tca-casadi --help`` and of ``validate`` on the bending module,
+    each in a fresh Python process."""
+    commands = {"startup_help_s": ["--help"],
+                "startup_validate_s": ["validate", str(SCENARIOS / "bending_module.yaml")]}
+    out = {}
+    for name, argv in commands.items():
+        out[name], _ = median_time(lambda: subprocess.run([sys.executable, "-m", "tca_casadi.cli", *argv],
+                                                          check=True, capture_output=True), repeats)
+    return out
+
+
+def check_times(names):
+    """``tca-casadi check`` on shipped scenarios: collocation and shooting seconds, agreement."""
+    from tca_casadi.studies import check
+    out = {}
+    for name in names:
+        report, _, _ = check(Simulation.from_file(SCENARIOS / f"{name}.yaml"))
+        out[name] = {"collocation_s": report.solve_times_s["collocation"], "shooting_s": report.solve_times_s["shooting"],
+                     "agree": report.agree, "tip_difference_m": report.tip_position_difference}
+    return out
 
 
 def _built(source):
@@ -154,6 +195,7 @@ def bench_inverse(sim, queries):
 COLUMNS = [("problem", "{}"), ("unknowns", "{}"), ("build_s", "{:.3f}"), ("cold_s", "{:.4f}"),
            ("warm_ipopt_s", "{:.4f}"), ("warm_newton_s", "{:.4f}"), ("sweep_s", "{:.3f}"),
            ("inverse_ipopt_s", "{:.3f}"), ("inverse_reduced_s", "{:.3f}"), ("shooting_s", "{:.3f}"),
+           ("shooting_differences_s", "{:.3f}"),
            ("speedup_cold", "{:.0f}x"), ("tip_error_collocation_m", "{:.1e}"),
            ("tip_error_shooting_m", "{:.1e}"), ("intervals_equal_accuracy", "{}"),
            ("tip_error_equal_accuracy_m", "{:.1e}"), ("speedup_equal_accuracy", "{:.0f}x")]
@@ -183,11 +225,29 @@ def main(argv=None):
     for name, (repeats, steps, shooting_repeats, queries) in plan.items():
         print(f"benchmarking {name} ...", file=sys.stderr, flush=True)
         rows.append(bench_problem(name, PROBLEMS[name](), repeats, steps, shooting_repeats, queries))
+    machine = {"date": date.today().isoformat(), "cpus": _cpus(), "python": platform.python_version(),
+               "platform": platform.platform()}
+    started = startup(2 if args.quick else 5)
+    checks = check_times(["bending_module"] if args.quick else
+                         ["bending_module", "twisting_module", "tendon_robot", "tendon_robot_two_segments",
+                          "arm", "arm_pick_and_place", "analytic/pure_moment", "analytic/tip_load",
+                          "analytic/tendon_arc"])
     print(table(rows))
+    print(f"start-up: --help {started['startup_help_s']:.3f} s, validate {started['startup_validate_s']:.3f} s")
+    for name, c in checks.items():
+        print(f"check {name}: collocation {c['collocation_s']:.3f} s, shooting {c['shooting_s']:.3f} s, "
+              f"{'agree' if c['agree'] else 'DISAGREE'} (tip {c['tip_difference_m']:.1e} m)")
+    print(f"measured {machine['date']} on {machine['cpus']} CPUs, Python {machine['python']}")
     args.output.parent.mkdir(parents=True, exist_ok=True)
-    args.output.write_text(json.dumps({"quick": args.quick, "rows": rows}, indent=2))
+    args.output.write_text(json.dumps({"quick": args.quick, "machine": machine, "startup": started,
+                                       "check": checks, "rows": rows}, indent=2))
     print(f"wrote {args.output}")
     return rows
+
+
+def _cpus():
+    import os
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
 
 
 if __name__ == "__main__":

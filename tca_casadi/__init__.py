@@ -5,15 +5,27 @@ and tendons, by direct collocation in CasADi solved with IPOPT.
     sim = tc.Simulation.from_file("scenarios/bending_module.yaml")
     solution = sim.solve()
     print(solution.tip_position, solution.tensions)
+
+The names below are imported on first use, so that ``tca-casadi --help`` and ``validate`` start
+without loading CasADi, SciPy or matplotlib.
 """
-from .errors import ModelError, PhysicsWarning, ScenarioError, SolverError, TcaError
-from .model import Robot, TcaLaw
-from .scenario import Scenario, load_scenario
-from .simulation import Simulation, solve
-from .solution import Solution
-from .studies import InverseResult, InverseStatics, Sweep, SweepResult, Target
+from ._lazy import lazy_getattr
+from .errors import ModelError, OutputError, PhysicsWarning, ScenarioError, SolverError, TcaError
 
 __version__ = "0.1.0"
 
-__all__ = ["Simulation", "solve", "Solution", "Sweep", "SweepResult", "InverseStatics", "InverseResult", "Target", "Scenario", "load_scenario", "Robot", "TcaLaw",
-           "ScenarioError", "SolverError", "ModelError", "TcaError", "PhysicsWarning"]
+#: public name -> module that defines it
+_LAZY = {"Simulation": ".simulation", "solve": ".simulation", "Solution": ".solution",
+         "Sweep": ".studies", "SweepResult": ".studies", "InverseStatics": ".studies",
+         "InverseResult": ".studies", "Target": ".studies", "Scenario": ".scenario",
+         "load_scenario": ".scenario", "Robot": ".model", "TcaLaw": ".model"}
+
+__all__ = list(_LAZY) + ["ScenarioError", "SolverError", "ModelError", "OutputError", "TcaError",
+                         "PhysicsWarning"]
+
+
+__getattr__ = lazy_getattr(__name__, _LAZY)
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

@@ -10,9 +10,8 @@ import logging
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from .errors import ScenarioError, TcaError
+from .output import default_directory, prepare_directory, write_json
 
 
 def _scenario_arguments(parser):
@@ -114,27 +113,27 @@ def build_parser():
 
 
 def main(argv=None):
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
-                        format="%(levelname)s %(name)s: %(message)s")
+    """Run one command; the exit code (0, 1, 2, or 130 when interrupted)."""
     try:
+        args = build_parser().parse_args(argv)
+        logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
+                            format="%(levelname)s %(name)s: %(message)s")
         return COMMANDS[args.command](args)
     except ScenarioError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print("\n".join(f"error: {line}" for line in str(exc).splitlines()), file=sys.stderr)
         return 2
     except TcaError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
+        print("interrupted (files already written are complete)", file=sys.stderr)
         return 130
 
 
 def _validate(args):
     from .model import Robot
     from .scenario import load_scenario
-    scenario = load_scenario(args.scenario, args.overrides)
+    scenario = load_scenario(Path(args.scenario), args.overrides)
     robot = Robot.from_scenario(scenario)
     print(f"{args.scenario}: valid scenario {scenario.name!r}: {len(robot.modules)} module(s), "
           f"{len(robot.tcas)} TCA(s), {len(robot.actuators) - len(robot.tcas)} tendon(s), "
@@ -146,14 +145,18 @@ def _validate(args):
 
 def _solve(args):
     from .simulation import Simulation
-    sim = Simulation.from_file(args.scenario, args.overrides, method=args.method)
+    sim = Simulation.from_file(Path(args.scenario), args.overrides, method=args.method)
+    output = prepare_directory(args.output or default_directory(sim.scenario.name),
+                               ["solution.json", "arrays.npz", "robot.png"],
+                               stale=["robot.png"] if args.no_plot else [])
     solution = sim.solve()
-    output = args.output or Path("results") / sim.scenario.name
     json_path, npz_path = solution.save(output)
     written = [json_path, npz_path]
     if not args.no_plot:
         from .plotting import save_robot_png
-        written.append(save_robot_png(solution, output / "robot.png"))
+        from .studies.objects import object_poses
+        objects = object_poses(sim.scenario, sim.robot, solution)
+        written.append(save_robot_png(solution, output / "robot.png", objects=objects))
     if args.json:
         print(json.dumps(solution.to_dict(), indent=2))
     else:
@@ -165,9 +168,10 @@ def _solve(args):
 def _check(args):
     from .simulation import Simulation
     from .studies import check
-    sim = Simulation.from_file(args.scenario, args.overrides)
+    sim = Simulation.from_file(Path(args.scenario), args.overrides)
+    output = prepare_directory(args.output or default_directory(sim.scenario.name), ["check.json"])
     report, _, _ = check(sim, args.position_tolerance, args.tension_tolerance)
-    path = report.save((args.output or Path("results") / sim.scenario.name) / "check.json")
+    path = report.save(output / "check.json")
     if args.json:
         print(json.dumps(report.to_dict(), indent=2))
     else:
@@ -179,12 +183,14 @@ def _check(args):
 def _sweep(args):
     from .simulation import Simulation
     from .studies import Sweep
-    sim = Simulation.from_file(args.scenario, args.overrides)
+    sim = Simulation.from_file(Path(args.scenario), args.overrides)
     sweep = Sweep(sim, args.params, _number(args.start), _number(args.stop), args.steps,
                   arclength=args.arclength, min_step=args.min_step)
+    plots = ["sweep.png", "sweep_robots.png"]
+    output = prepare_directory(args.output or default_directory(sim.scenario.name, "sweep"),
+                               ["sweep.csv", "sweep.json"] + plots, stale=plots if args.no_plot else [])
     result = _with_progress(sweep.run, "sweep", quiet=args.quiet)
-    written = result.save(args.output or Path("results") / sim.scenario.name / "sweep",
-                          plots=not args.no_plot)
+    written = result.save(output, plots=not args.no_plot)
     print(result.summary())
     print("wrote " + ", ".join(str(p) for p in written))
     return 0 if result.completed else 1
@@ -194,7 +200,7 @@ def _inverse(args):
     from .simulation import Simulation
     from .studies.inverse import InverseStatics, Target, read_targets, write_path_results
     from .units import to_si
-    sim = Simulation.from_file(args.scenario, args.overrides)
+    sim = Simulation.from_file(Path(args.scenario), args.overrides)
     tolerance = None
     if args.tolerance is not None:
         try:
@@ -203,15 +209,17 @@ def _inverse(args):
             raise ScenarioError(f"--tolerance: {exc}") from None
     solver = InverseStatics.from_scenario(sim, vary=args.vary, bounds=args.bounds, tolerance=tolerance,
                                           starts=args.starts, method=args.method)
-    output = args.output or Path("results") / sim.scenario.name / "inverse"
+    files = ["inverse_path.csv"] if args.path is not None else ["inverse.json", "solution.json",
+                                                                 "arrays.npz", "inverse.png"]
+    output = prepare_directory(args.output or default_directory(sim.scenario.name, "inverse"), files,
+                               stale=["inverse.png"] if args.no_plot and args.path is None else [])
     if args.path is not None:
         targets = read_targets(args.path, args.point or "tip")
         results = _with_progress(lambda progress: solver.track(targets, progress), "inverse", args.quiet)
-        output.mkdir(parents=True, exist_ok=True)
         written = write_path_results(output / "inverse_path.csv", results)
         reached = sum(r.reachable for r in results)
         print(f"inverse path: {reached}/{len(results)} targets reached; "
-              f"median {np.median([r.solve_time_s for r in results]) * 1e3:.0f} ms per target")
+              f"median {_median([r.solve_time_s for r in results]) * 1e3:.0f} ms per target")
         print(f"wrote {written}")
         return 0 if reached == len(results) else 1
     if args.target_position is None:
@@ -233,17 +241,19 @@ def _sequence(args):
     from .plotting.animation import save_animation, save_step_pngs
     from .simulation import Simulation
     from .studies.sequence import run_sequence
-    sim = Simulation.from_file(args.scenario, args.overrides)
+    sim = Simulation.from_file(Path(args.scenario), args.overrides)
     frames = 0 if args.no_animation else max(args.frames, 0)
+    stale = ["step_*.png"] + (["sequence.gif", "sequence.mp4"] if args.no_animation else []) + \
+        ([] if args.check else ["sequence_check.json"])
+    output = prepare_directory(args.output or default_directory(sim.scenario.name, "sequence"),
+                               ["sequence.csv", "sequence_check.json", "sequence.gif", "sequence.mp4"],
+                               stale=stale)
     result = _with_progress(lambda progress: run_sequence(sim, frames_per_step=frames, progress=progress,
                                                           check=args.check), "steps", args.quiet)
-    output = args.output or Path("results") / sim.scenario.name / "sequence"
-    output.mkdir(parents=True, exist_ok=True)
     written = [result.to_csv(output / "sequence.csv"), *save_step_pngs(result, output)]
     if args.check:
         reports = {name: report.to_dict() for name, report in zip(result.names, result.checks)}
-        (output / "sequence_check.json").write_text(json.dumps(reports, indent=2))
-        written.append(output / "sequence_check.json")
+        written.append(write_json(output / "sequence_check.json", reports))
     if not args.no_animation:
         written += _with_progress(lambda progress: save_animation(result, output, progress=progress),
                                   "animation", args.quiet)
@@ -251,6 +261,11 @@ def _sequence(args):
     print(f"wrote {len(written)} files to {output}: sequence.csv, step PNGs"
           + ("" if args.no_animation else ", " + ", ".join(p.name for p in written if p.suffix in (".gif", ".mp4"))))
     return 0 if result.converged and result.agree is not False else 1
+
+
+def _median(values):
+    import statistics
+    return statistics.median(values)
 
 
 def _number(text):

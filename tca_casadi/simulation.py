@@ -48,7 +48,7 @@ class Simulation:
         vector; anything else (a length, a route, the mesh) rebuilds the model and solver.
         """
         if self.scenario._raw is None:           # built in Python, not loaded: start from its data
-            from .scenario.loader import SourceMap
+            from .scenario.sources import SourceMap
             self.scenario._raw = self.scenario.model_dump(mode="json")
             self.scenario._sources = SourceMap("<scenario>")
         raw = apply_overrides(self.scenario._raw, {path: value}, self.scenario._sources)
@@ -128,14 +128,37 @@ class Simulation:
             solution, lam, steps, iterations = _warm_steps(solver, rest, target, solution,
                                                            first_step, min_step)
         if lam < 1.0:
-            solution.converged = False
-            solution.message = (f"continuation from the reference state stalled at lambda = "
-                                f"{lam:.4f} (step below {min_step}): {solution.message}")
+            solution = self._stalled(solver, solution, rest, target, lam, min_step)
         else:
             solution.message += f" (continuation from the reference state, {steps} steps)"
         solution.solve_time_s = time.perf_counter() - started    # all steps included
         solution.iterations = iterations
         return solution
+
+
+    def _stalled(self, solver, reached, rest, target, lam, min_step):
+        """The unconverged result of a continuation that stopped at ``lam``: the state it reached,
+        reported at the user's parameters (their values in the table, the residual there), with
+        how far it got and the parameter values reached."""
+        changed = [name for name in self.robot.layout.names()
+                   if np.any(rest[self.robot.layout[name]] != target[self.robot.layout[name]])]
+        reached_values = rest + lam * (target - rest)
+        where = "; ".join(f"{name} {_format(reached_values[self.robot.layout[name]])} of "
+                          f"{_format(target[self.robot.layout[name]])}" for name in changed[:6])
+        more = f" and {len(changed) - 6} more" if len(changed) > 6 else ""
+        status = {"converged": False, "status": "continuation stalled", "iterations": reached.iterations,
+                  "solve_time_s": reached.solve_time_s, "max_residual": float("nan"), "message": ""}
+        result = solver.evaluate(reached.raw.get("w", reached.raw.get("z")), target, status)
+        result.message = (f"continuation from the reference state stalled at lambda = {lam:.4f} of 1 "
+                          f"(step below {min_step}); reached {where}{more}; max scaled residual at the "
+                          f"requested parameters {result.max_residual:.2e}; last step: {reached.message}")
+        result.warnings[0] = f"not converged: {result.message}"
+        return result
+
+
+def _format(values):
+    values = np.atleast_1d(values)
+    return f"{values[0]:.6g}" if values.size == 1 else "[" + ", ".join(f"{v:.4g}" for v in values) + "]"
 
 
 def _follow_branch(solver, rest, target, start, first_step, min_step):
@@ -144,8 +167,20 @@ def _follow_branch(solver, rest, target, start, first_step, min_step):
     point, _, steps, failure = follower.advance(follower.point(0.0, start), 1.0, first_step, 0.5, min_step)
     iterations = start.iterations + follower.iterations
     if failure is not None:
-        return failure.trial, point.lam, steps, iterations
+        reached = point.solution
+        reached.message = _failure_text(failure)
+        return reached, point.lam, steps, iterations
     return point.solution, 1.0, steps, iterations
+
+
+def _failure_text(failure):
+    """What the last rejected continuation step did."""
+    if not failure.trial.converged:
+        return failure.trial.message
+    if failure.crossed:
+        return ("it converged, but det J changes sign within the step: a fold or a bifurcation "
+                "lies between (sweep the parameter with --arclength to follow the branch)")
+    return f"it converged only off the branch (a jump to another branch, inconsistency {failure.jump:.2g})"
 
 
 def _warm_steps(solver, rest, target, solution, first_step, min_step):
@@ -160,7 +195,8 @@ def _warm_steps(solver, rest, target, solution, first_step, min_step):
         elif step / 2 >= min_step:
             step /= 2
         else:
-            return trial, lam, steps, iterations
+            solution.message = trial.message
+            return solution, lam, steps, iterations
     return solution, lam, steps, iterations
 
 

@@ -8,6 +8,8 @@ import re
 
 import pint
 
+from .text import clip, shorten  # noqa: F401  (messages cut long values alike)
+
 ureg = pint.UnitRegistry()
 
 #: quantity kind -> (SI unit that plain numbers are taken in, human name)
@@ -30,33 +32,47 @@ KINDS = {
     "dimensionless": ("", "a plain number"),
 }
 
-_NUMBER_AND_UNIT = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
+_NUMBER_AND_UNIT = re.compile(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*)", re.DOTALL)
+
+#: a quantity string longer than this is refused before it is parsed
+MAX_TEXT = 200
+#: the largest magnitude accepted for any quantity in SI units (beyond it the physics overflows)
+MAX_MAGNITUDE = 1e30
 
 
 def to_si(value, kind):
     """Convert a number or a ``"number unit"`` string to a float in the SI unit of ``kind``.
 
     Raises ``ValueError`` with a message fit for the user (unknown unit, wrong dimension,
-    not a number, not finite).
+    not a number, not finite, too large).
     """
     si_unit, name = KINDS[kind]
     if isinstance(value, bool):
         raise ValueError(f"expected {name}, got a boolean")
     if isinstance(value, (int, float)):
-        number = float(value)
+        try:
+            number = float(value)
+        except OverflowError:
+            raise ValueError(f"{shorten(value)} is too large") from None
     elif isinstance(value, str):
         number = _parse_string(value, si_unit, name)
     else:
-        raise ValueError(f"expected {name} (a number or a string like '45 mm'), got {value!r}")
+        raise ValueError(f"expected {name} (a number or a string like '45 mm'), got {shorten(value)}")
     if not math.isfinite(number):
-        raise ValueError(f"expected a finite number, got {value!r}")
+        raise ValueError(f"expected a finite number, got {shorten(value)}")
+    if abs(number) > MAX_MAGNITUDE:
+        raise ValueError(f"{shorten(value)} is out of range: |value| must be at most "
+                         f"{MAX_MAGNITUDE:g} {si_unit or ''}".rstrip())
     return number
 
 
 def _parse_string(text, si_unit, name):
-    match = _NUMBER_AND_UNIT.match(text)
+    stripped = text.strip()
+    if len(stripped) > MAX_TEXT:
+        raise ValueError(f"cannot read {shorten(text)} as {name}: longer than {MAX_TEXT} characters")
+    match = _NUMBER_AND_UNIT.fullmatch(stripped)
     if not match:
-        raise ValueError(f"cannot read {text!r} as {name}: expected a number followed by a unit")
+        raise ValueError(f"cannot read {shorten(text)} as {name}: expected a number followed by a unit")
     number, unit = float(match.group(1)), match.group(2)
     if not unit:
         return number
@@ -64,9 +80,9 @@ def _parse_string(text, si_unit, name):
         quantity = ureg.Quantity(number, unit)
         return float(quantity.to(si_unit or "dimensionless").magnitude)
     except pint.errors.UndefinedUnitError:
-        raise ValueError(f"unknown unit {unit!r} in {text!r}") from None
+        raise ValueError(f"unknown unit {shorten(unit)} in {shorten(text)}") from None
     except pint.errors.DimensionalityError:
-        raise ValueError(f"{text!r} is not {name} (expected units convertible to "
+        raise ValueError(f"{shorten(text)} is not {name} (expected units convertible to "
                          f"{si_unit or 'a plain number'})") from None
-    except (pint.errors.PintError, ValueError, TypeError, AttributeError, SyntaxError):
-        raise ValueError(f"cannot read the unit {unit!r} in {text!r}") from None
+    except Exception:   # pint's parser raises many kinds (ZeroDivisionError, TokenError, ...)
+        raise ValueError(f"cannot read the unit {shorten(unit)} in {shorten(text)}") from None

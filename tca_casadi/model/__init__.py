@@ -1,5 +1,6 @@
 """The physics, written once: rotations, sections, TCA law, routes, rod equations, the robot."""
-from .robot import Robot
-from .tca_law import TcaLaw
+from .._lazy import lazy_getattr
 
-__all__ = ["Robot", "TcaLaw"]
+_LAZY = {"Robot": ".robot", "TcaLaw": ".tca_law"}
+__all__ = list(_LAZY)
+__getattr__ = lazy_getattr(__name__, _LAZY)

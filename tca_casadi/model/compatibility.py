@@ -15,8 +15,9 @@ the taut condition by about ``eps^2 F_s / (2 F)``, far below the solver toleranc
 """
 from dataclasses import dataclass
 
-import casadi as ca
 import numpy as np
+
+from .tca_law import is_casadi
 
 SMOOTHING = 1e-9
 
@@ -41,7 +42,10 @@ class TendonLaw:
 
 
 def _sqrt(value):
-    return ca.sqrt(value) if isinstance(value, (ca.SX, ca.MX, ca.DM)) else np.sqrt(value)
+    if is_casadi(value):
+        import casadi as ca
+        return ca.sqrt(value)
+    return np.sqrt(value)
 
 
 def compatibility(actuator, stroke, force, parameter, force_scale):

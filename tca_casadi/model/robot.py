@@ -8,7 +8,6 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 import numpy as np
-from scipy.integrate import simpson
 
 from ..scenario.checks import fail, route_span
 from .routes import make_route
@@ -253,13 +252,15 @@ def _actuator(scenario, index, config, a_index, a_config):
 
 
 def reference_path_length(route, xi_star, points=4001):
-    """``l*``: length of the route in the reference configuration [m] (Simpson's rule on a fine
-    grid; exact for straight routes and helices on a straight body)."""
+    """``l*``: length of the route in the reference configuration [m] (composite Simpson rule on
+    a fine grid, ``points`` odd; exact for straight routes and helices on a straight body)."""
     s = np.linspace(*route.span, points)
     r, dr, _ = route.evaluate(s)
     a = xi_star[3:6, None] + np.cross(xi_star[0:3], r, axis=0) + dr
     speed = np.linalg.norm(a, axis=0)
-    return float(simpson(speed, x=s))
+    weights = np.ones(points)
+    weights[1:-1:2], weights[2:-1:2] = 4.0, 2.0
+    return float(weights @ speed * (s[1] - s[0]) / 3.0)
 
 
 def _check_inside(scenario, index, config, a_index, route):
@@ -275,7 +276,7 @@ def _check_inside(scenario, index, config, a_index, route):
             "cross_section.envelope")
         raw, sources = scenario._raw or {}, scenario._sources
         if sources is None:
-            from ..scenario.loader import SourceMap
+            from ..scenario.sources import SourceMap
             sources = SourceMap("<scenario>")
         fail(raw, sources, ("modules", index, "actuators", a_index, "route"),
              f"route passes outside the body ({size}) at x={worst[0] * 1e3:.3g} mm, "

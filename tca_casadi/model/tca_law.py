@@ -8,8 +8,12 @@ Every method accepts CasADi symbols or numpy arrays.
 import math
 from dataclasses import dataclass
 
-import casadi as ca
 import numpy as np
+
+
+def is_casadi(value):
+    """True for a CasADi symbol or matrix (checked without importing CasADi)."""
+    return type(value).__module__.split(".")[0] == "casadi"
 
 
 @dataclass(frozen=True)
@@ -23,6 +27,8 @@ class TcaLaw:
     reference_temperature: float
     untwist_coefficients: tuple  # (c2, c1, c0), rad/m
     shear_coefficients: tuple    # (a2, a1, a0), Pa
+    min_temperature: float = -273.15   # degC: the range the law is validated for
+    max_temperature: float = float("inf")
 
     @classmethod
     def from_type(cls, tca_type, reference_length):
@@ -32,7 +38,8 @@ class TcaLaw:
         return cls(tca_type.coil_radius, tca_type.fiber_radius, alpha, fiber, reference_length,
                    tca_type.reference_temperature,
                    (tca_type.untwist.c2, tca_type.untwist.c1, tca_type.untwist.c0),
-                   (tca_type.shear_modulus.a2, tca_type.shear_modulus.a1, tca_type.shear_modulus.a0))
+                   (tca_type.shear_modulus.a2, tca_type.shear_modulus.a1, tca_type.shear_modulus.a0),
+                   tca_type.min_temperature, tca_type.max_temperature)
 
     @property
     def stroke_coefficient(self):
@@ -65,7 +72,8 @@ class TcaLaw:
         """``G_t(F)`` [Pa]: the fit for F >= 0, a positive C1 exponential extension for F < 0."""
         a2, a1, a0 = self.shear_coefficients
         fit = a2 * force**2 + a1 * force + a0
-        if isinstance(force, (ca.SX, ca.MX, ca.DM)):
+        if is_casadi(force):
+            import casadi as ca
             extension = a0 * ca.exp(force * a1 / a0)
             return ca.if_else(force >= 0, fit, extension)
         force = np.asarray(force, dtype=float)

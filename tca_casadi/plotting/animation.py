@@ -5,6 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..output import atomic_path, save_figure
 from .robot3d import _pyplot, draw_robot, set_equal_limits
 
 
@@ -16,11 +17,14 @@ def save_step_pngs(result, directory):
     for index, (name, solution) in enumerate(zip(result.names, result.solutions)):
         plt = _pyplot()
         objects = result.objects[index].values() if result.objects else ()
-        ax = draw_robot(solution, title=f"({chr(97 + index) if index < 26 else index}) {name}", objects=objects)
+        title = f"({chr(97 + index) if index < 26 else index}) {name}"
+        if result.stage and result.stage[index]:
+            title += f"\n[{result.stage[index]}, not a TCA]"
+        ax = draw_robot(solution, title=title, objects=objects)
         _fix_limits(ax, _limits(result))
         path = directory / f"step_{index:02d}_{_slug(name)}.png"
         ax.figure.tight_layout()
-        ax.figure.savefig(path, dpi=110)
+        save_figure(ax.figure, path, dpi=110, bbox_inches="tight", pad_inches=0.15)
         plt.close(ax.figure)
         paths.append(path)
     return paths
@@ -37,7 +41,8 @@ def save_animation(result, directory, fps=8, progress=None):
     for index, (name, solution, transition) in enumerate(zip(result.names, result.solutions, result.transitions)):
         moving = result.transition_objects[index] if result.transition_objects else [{}] * len(transition)
         final = result.objects[index] if result.objects else {}
-        frames += [(f"-> {name}", s, o) for (_, s), o in zip(transition, moving)] + [(name, solution, final)] * 3
+        note = f"\n[{result.stage[index]}, not a TCA]" if result.stage and result.stage[index] else ""
+        frames += [(f"-> {name}{note}", s, o) for (_, s), o in zip(transition, moving)] + [(name + note, solution, final)] * 3
     fig = plt.figure(figsize=(5.6, 5.6))
     ax = fig.add_subplot(projection="3d")
     limits = _limits(result)
@@ -53,10 +58,12 @@ def save_animation(result, directory, fps=8, progress=None):
 
     animation = FuncAnimation(fig, draw, frames=len(frames), blit=False)
     paths = [directory / "sequence.gif"]
-    animation.save(paths[0], writer=PillowWriter(fps=fps))
+    with atomic_path(paths[0]) as temporary:
+        animation.save(temporary, writer=PillowWriter(fps=fps))
     if shutil.which("ffmpeg"):
         paths.append(directory / "sequence.mp4")
-        animation.save(paths[1], writer=FFMpegWriter(fps=fps))
+        with atomic_path(paths[1]) as temporary:
+            animation.save(temporary, writer=FFMpegWriter(fps=fps))
     plt.close(fig)
     return paths
 

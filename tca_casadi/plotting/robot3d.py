@@ -22,31 +22,24 @@ def _has_display():
 def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_points=(), objects=()):
     """Draw ``solution`` on a 3D axes (created when ``ax`` is None). Lengths in mm.
 
-    ``extra_points``: iterable of ``(position (3,) [m], label, color)`` to mark (e.g. a target);
-    ``objects``: :class:`~tca_casadi.studies.objects.ObjectPose` boxes to draw.
+    Centerline thick black; cross-sections as translucent blue outlines (rectangles as
+    rectangles); a thin grey line along each body's material x axis, so that twist shows;
+    actuators coloured by kind (dotted when slack); point masses as black dots and point forces as
+    arrows; ``extra_points``: iterable of ``(position (3,) [m], label, color)`` to mark (e.g. a
+    target), drawn on top; ``objects``: :class:`~tca_casadi.studies.objects.ObjectPose` boxes.
     """
     plt = _pyplot()
     if ax is None:
         fig = plt.figure(figsize=(6.4, 6.4))
         ax = fig.add_subplot(projection="3d")
-    everything = []
-    for module in solution.modules:
-        p = module.p * 1e3
-        ax.plot(*p, color=COLORS["centerline"], linewidth=3.0, zorder=3)
-        everything.append(p)
-        for k in np.linspace(0, p.shape[1] - 1, sections_per_module).round().astype(int):
-            ring = p[:, k:k + 1] + module.R[:, :, k] @ module.outline * 1e3
-            ax.plot(*ring, color=COLORS["section"], linewidth=0.8)
-            everything.append(ring)
+    everything = [_draw_module(ax, module, sections_per_module) for module in solution.modules]
+    everything = [points for group in everything for points in group]
     for key, actuator in solution.actuators.items():
         kind = "tendon" if actuator.kind == "tendon" else ("heated" if actuator.heated else "passive")
         force = "slack" if actuator.slack else f"{actuator.tension * 1e3:.2f} mN"
         ax.plot(*(_smooth(actuator.path) * 1e3), color=COLORS[kind], linewidth=1.6,
                 linestyle=":" if actuator.slack else "-", label=f"{key} ({kind}, {force})")
-    for position, label, color in extra_points:
-        point = np.asarray(position) * 1e3
-        ax.scatter(*point, color=color, s=40, label=label, depthshade=False)
-        everything.append(point.reshape(3, 1))
+    everything += _draw_loads(ax, solution.loads, np.hstack(everything))
     for pose in objects:
         corners = pose.corners() * 1e3
         color = COLORS["held" if pose.held else "object"]
@@ -54,13 +47,69 @@ def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_point
             ax.plot(*corners[:, [a, b]], color=color, linewidth=1.4,
                     label=f"{pose.name} ({'held' if pose.held else 'resting'})" if k == 0 else None)
         everything.append(corners)
+    for k, (position, label, color) in enumerate(extra_points):
+        point = np.asarray(position) * 1e3       # the first as a large ring, the rest as stars on top
+        style = ({"s": 220, "facecolors": "none", "edgecolors": color, "linewidths": 2.0} if k == 0 else
+                 {"s": 70, "marker": "*", "color": color, "edgecolors": "black", "linewidths": 0.5})
+        ax.scatter(*point, label=label, depthshade=False, zorder=10 + k, **style)
+        everything.append(point.reshape(3, 1))
     _equal_axes(ax, np.hstack(everything))
-    ax.set_xlabel("x [mm]"), ax.set_ylabel("y [mm]"), ax.set_zlabel("z [mm]")
+    style_axes(ax)
     state = "" if solution.converged else "  (NOT CONVERGED)"
-    ax.set_title(title or f"{solution.scenario_name}{state}")
-    if solution.actuators or extra_points or objects:
+    ax.set_title(title or f"{solution.scenario_name}{state}", fontsize=10)
+    if solution.actuators or extra_points or objects or solution.loads:
         ax.legend(loc="upper left", fontsize=7)
     return ax
+
+
+def _draw_module(ax, module, sections):
+    """Centerline, cross-sections and the material-x marker line of one module; returns the
+    point sets drawn (mm)."""
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    p = module.p * 1e3
+    ax.plot(*p, color=COLORS["centerline"], linewidth=3.0, zorder=3)
+    drawn = [p]
+    for k in np.linspace(0, p.shape[1] - 1, sections).round().astype(int):
+        ring = p[:, k:k + 1] + module.R[:, :, k] @ module.outline * 1e3
+        ax.add_collection3d(Poly3DCollection([ring.T], facecolors=COLORS["section"], alpha=0.12,
+                                             edgecolors=COLORS["section"], linewidths=0.8))
+        drawn.append(ring)
+    reach = np.max(np.abs(module.outline[0])) * 1e3
+    stripe = p + np.einsum("ijk,j->ik", module.R, np.array([reach, 0.0, 0.0]))
+    ax.plot(*stripe, color="0.45", linewidth=0.7, linestyle="--")
+    return drawn
+
+
+def _draw_loads(ax, loads, points):
+    """Point masses as black dots, point forces as arrows scaled to a fifth of the drawing."""
+    size = float(np.max(np.ptp(points, axis=1))) if points.size else 1.0
+    forces = [np.linalg.norm(load["force"]) for load in loads if load["kind"] == "point"]
+    scale = 0.2 * size / max(forces) if forces and max(forces) > 0 else 0.0
+    drawn = []
+    for load in loads:
+        at = np.asarray(load["position"]) * 1e3
+        if load["kind"] in ("mass", "object"):
+            grams = np.linalg.norm(load["force"]) / 9.81 * 1e3
+            if grams > 0:
+                ax.scatter(*at, color="black", s=30, depthshade=False, zorder=9,
+                           label=f"{load['name']} ({grams:.3g} g)" if load["kind"] == "mass" else None)
+        elif scale > 0 and np.linalg.norm(load["force"]) > 0:
+            arrow = np.asarray(load["force"]) * scale
+            ax.quiver(*at, *arrow, color="#8c564b", linewidth=1.5, arrow_length_ratio=0.25,
+                      label=f"{load['name']} ({np.linalg.norm(load['force']) * 1e3:.3g} mN)")
+            drawn.append(np.column_stack([at, at + arrow]))
+    return drawn
+
+
+def style_axes(ax, ticks=4):
+    """Few ticks, labels in mm set off from the tick labels (no collisions on small boxes)."""
+    from matplotlib.ticker import MaxNLocator
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.set_major_locator(MaxNLocator(ticks))
+    ax.tick_params(labelsize=7, pad=1)
+    ax.set_xlabel("x [mm]", labelpad=4, fontsize=8)
+    ax.set_ylabel("y [mm]", labelpad=4, fontsize=8)
+    ax.set_zlabel("z [mm]", labelpad=6, fontsize=8)
 
 
 def _smooth(path, per_segment=6):
@@ -97,6 +146,7 @@ def save_robot_png(solution, path, **options):
     plt = _pyplot()
     ax = draw_robot(solution, **options)
     ax.figure.tight_layout()
-    ax.figure.savefig(path, dpi=120)
+    from ..output import save_figure
+    save_figure(ax.figure, path, dpi=120, bbox_inches="tight", pad_inches=0.15)
     plt.close(ax.figure)
     return path

@@ -2,7 +2,20 @@
 (events marked), and the robot drawn at a few points of the branch."""
 import numpy as np
 
-from .robot3d import _equal_axes, _pyplot, _smooth
+from ..output import save_figure
+from .robot3d import _equal_axes, _pyplot, _smooth, style_axes
+
+
+#: marker, dash pattern and size per curve, so that curves lying on each other stay visible
+#: (a larger hollow marker under a smaller one, different dashes)
+_MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*"]
+_DASHES = ["-", "--", "-.", ":"]
+
+
+def line_style(k):
+    """Keyword arguments of ``plot`` for the k-th curve of a panel."""
+    return {"marker": _MARKERS[k % len(_MARKERS)], "linestyle": _DASHES[k % len(_DASHES)],
+            "markersize": max(9 - 1.5 * (k % 4), 3), "markerfacecolor": "none", "linewidth": 1.3}
 
 
 def plot_sweep(result, path):
@@ -14,11 +27,11 @@ def plot_sweep(result, path):
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 7), sharex=True)
     move = (result.tip_positions - result.tip_positions[0]) * 1e3
     for axis, name in enumerate("xyz"):
-        top.plot(x, move[:, axis], ".-", label=f"tip {name}")
-    top.plot(x, np.linalg.norm(move, axis=1), "k--", label="|tip displacement|")
+        top.plot(x, move[:, axis], label=f"tip {name}", **line_style(axis))
+    top.plot(x, np.linalg.norm(move, axis=1), color="black", label="|tip displacement|", **line_style(3))
     top.set_ylabel("tip displacement [mm]")
-    for key in result.points[0].solution.actuators:
-        bottom.plot(x, result.tensions(key) * 1e3, ".-", label=key)
+    for k, key in enumerate(result.points[0].solution.actuators):
+        bottom.plot(x, result.tensions(key) * 1e3, label=key, **line_style(k))
     bottom.axhline(0.0, color="grey", linewidth=0.8)
     bottom.set_ylabel("tension [mN]")
     bottom.set_xlabel(parameter.label + ("" if len(result.parameters) == 1 else " (and the others with it)"))
@@ -31,7 +44,7 @@ def plot_sweep(result, path):
     state = "" if result.completed else "  (stopped early)"
     top.set_title(f"sweep of {', '.join(p.path for p in result.parameters)}{state}", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120)
     plt.close(fig)
     return path
 
@@ -55,11 +68,11 @@ def plot_sweep_robots(result, path, count=5):
             style = "-" if actuator.kind == "tendon" or actuator.heated else "--"
             ax.plot(*(_smooth(actuator.path) * 1e3), style, color=colour, linewidth=0.8, alpha=0.8)
     _equal_axes(ax, np.hstack(everything))
-    ax.set_xlabel("x [mm]"), ax.set_ylabel("y [mm]"), ax.set_zlabel("z [mm]")
+    style_axes(ax)
     ax.set_title("robot along the sweep (thick: centerline; thin: heated TCAs and tendons, "
                  "dashed: passive)", fontsize=8)
     ax.legend(loc="upper left", fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120, bbox_inches="tight", pad_inches=0.15)
     plt.close(fig)
     return path

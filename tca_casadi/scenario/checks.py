@@ -1,8 +1,7 @@
 """Checks that need the whole scenario: names unique and resolvable, spans and load positions
 inside their module. Each failure is one line naming file, line and key path."""
-import difflib
-
 from ..errors import ScenarioError
+from .sources import did_you_mean, format_path
 
 #: top-level keys; module and load names must differ from them so dotted paths stay unambiguous
 RESERVED = ("name", "description", "gravity", "base", "materials", "tca_types", "modules",
@@ -11,16 +10,12 @@ RESERVED = ("name", "description", "gravity", "base", "materials", "tca_types", 
 
 def fail(raw, sources, path, message):
     """Raise :class:`ScenarioError` for ``path`` (a raw-data key path)."""
-    from .loader import format_path
     raise ScenarioError(f"{sources.where(path)}: {format_path(path, raw)}: {message}")
 
 
 def closest(word, options):
     """`` (did you mean 'x'?)`` or a list of the valid names."""
-    match = difflib.get_close_matches(word, list(options), n=1, cutoff=0.5)
-    if match:
-        return f" (did you mean {match[0]!r}?)"
-    return f"; known: {', '.join(options)}" if options else "; none are defined"
+    return did_you_mean(word, options)
 
 
 def check_references(scenario, raw, sources):
@@ -82,7 +77,22 @@ def _check_module(scenario, index, module, raw, sources):
         if actuator.kind == "tca" and actuator.type not in scenario.tca_types:
             fail(raw, sources, a_path + ("type",),
                  f"unknown TCA type {actuator.type!r}{closest(actuator.type, scenario.tca_types)}")
+        if actuator.kind == "tca":
+            problem = temperature_problem(actuator.temperature, scenario.tca_types[actuator.type], actuator.type)
+            if problem:
+                fail(raw, sources, a_path + ("temperature",), problem)
         _check_span(route_span(actuator.route, module.length), module, a_path + ("route",), raw, sources)
+
+
+def temperature_problem(temperature, tca_type, type_name):
+    """Why ``temperature`` [degC] lies outside a TCA type's validated range, or None."""
+    for bound, beyond, word in (("max_temperature", temperature > tca_type.max_temperature, "above"),
+                                ("min_temperature", temperature < tca_type.min_temperature, "below")):
+        if beyond:
+            limit = getattr(tca_type, bound)
+            return (f"{temperature:g} degC is {word} the TCA type's {bound} ({limit:g} degC), the range "
+                    f"its law is validated for; to go there, set tca_types.{type_name}.{bound}")
+    return None
 
 
 def route_span(route, length):

@@ -1,48 +1,24 @@
-"""Load a scenario from YAML (or a dict), apply ``--set`` overrides, validate, and report the
-first problem as one line: ``FILE:LINE: key.path: what is wrong (did you mean ...?)``."""
+"""Load a scenario from YAML (or a dict), apply ``--set`` overrides, validate, and report every
+problem, one line each: ``FILE:LINE: key.path: what is wrong (did you mean ...?)``."""
 import copy
-import difflib
 import typing
 from pathlib import Path
 
 import pydantic
-import yaml
 
 from ..errors import ScenarioError
 from .checks import check_references
 from .overrides import apply_overrides
 from .schema import Scenario
-
-
-class SourceMap:
-    """Where each key path of a scenario came from: a file line, or a ``--set`` override."""
-
-    def __init__(self, origin="<scenario>", lines=None):
-        self.origin = origin
-        self.lines = dict(lines or {})
-        self.overridden = {}
-
-    def where(self, path):
-        """``FILE:LINE`` (or ``--set PATH=VALUE``) of the longest known prefix of ``path``."""
-        path = tuple(path)
-        below = [label for overridden, label in self.overridden.items()
-                 if overridden[: len(path)] == path]
-        if below and path not in self.lines:
-            return below[0]
-        suffix = f" (after {', '.join(below)})" if below else ""
-        for cut in range(len(path), -1, -1):
-            if path[:cut] in self.overridden:
-                return self.overridden[path[:cut]]
-            if path[:cut] in self.lines:
-                return f"{self.origin}:{self.lines[path[:cut]]}{suffix}"
-        return self.origin
+from .sources import SourceMap, clip, did_you_mean, format_path, shorten
+from .yaml_safe import parse_yaml
 
 
 def load_scenario(source, overrides=()):
     """Validated :class:`Scenario` from a YAML path, YAML text or dict, with overrides applied.
 
     ``overrides`` is a list of ``"dotted.path=value"`` strings or a ``{path: value}`` dict.
-    Raises :class:`ScenarioError` with one line naming file, line and key path.
+    Raises :class:`ScenarioError` naming file, line and key path of every problem.
     """
     raw, sources = read_raw(source)
     raw = apply_overrides(raw, overrides, sources)
@@ -51,18 +27,44 @@ def load_scenario(source, overrides=()):
 
 
 def read_raw(source):
-    """Raw mapping and its :class:`SourceMap` from a path, YAML text or dict."""
+    """Raw mapping and its :class:`SourceMap` from a path, YAML text or dict. A string is a path
+    unless it holds a line break or starts with ``{`` (YAML text)."""
     if isinstance(source, dict):
         return copy.deepcopy(source), SourceMap("<dict>")
-    if isinstance(source, Path) or (isinstance(source, str) and "\n" not in source
-                                    and source.endswith((".yaml", ".yml"))):
-        path = Path(source)
-        if not path.is_file():
-            raise ScenarioError(f"{path}: no such scenario file")
-        return _parse_yaml(path.read_text(encoding="utf-8"), str(path))
-    if isinstance(source, str):
-        return _parse_yaml(source, "<yaml>")
+    if isinstance(source, str) and ("\n" in source or source.lstrip().startswith("{")):
+        return _as_mapping(*parse_yaml(source, "<yaml>"))
+    if isinstance(source, (str, Path)):
+        return _as_mapping(*parse_yaml(_read_file(Path(source)), str(source)))
     raise ScenarioError(f"cannot read a scenario from {type(source).__name__}")
+
+
+def _read_file(path):
+    """The text of a scenario file; one-line errors for a missing file, a directory, a file that
+    cannot be read, or one that is not UTF-8 text."""
+    name = clip(path)
+    try:
+        kind = "directory" if path.is_dir() else "file" if path.is_file() else None
+        data = path.read_bytes() if kind == "file" else None
+    except (OSError, ValueError) as exc:       # permission, a NUL byte, a name too long
+        raise ScenarioError(f"{name}: cannot read the scenario file "
+                            f"({getattr(exc, 'strerror', None) or exc})") from None
+    if kind is None:
+        raise ScenarioError(f"{name}: no such scenario file")
+    if kind == "directory":
+        raise ScenarioError(f"{name}: is a directory, not a scenario file")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data[:exc.start].count(b"\n") + 1
+        raise ScenarioError(f"{path}:{line}: not a text (UTF-8) file: byte 0x{data[exc.start]:02x} "
+                            f"at offset {exc.start}") from None
+
+
+def _as_mapping(data, sources):
+    if not isinstance(data, dict):
+        raise ScenarioError(f"{sources.origin}: a scenario must be a YAML mapping of keys "
+                            f"(name, materials, modules, ...), got {type(data).__name__}")
+    return data, sources
 
 
 def validate(raw, sources):
@@ -70,57 +72,33 @@ def validate(raw, sources):
     try:
         scenario = Scenario.model_validate(raw)
     except pydantic.ValidationError as exc:
-        raise ScenarioError(_first_error(exc, raw, sources)) from None
+        raise ScenarioError(_all_errors(exc, raw, sources)) from None
+    except RecursionError:
+        raise ScenarioError(f"{sources.origin}: the scenario is nested too deeply") from None
     check_references(scenario, raw, sources)
     scenario._raw = raw
     scenario._sources = sources
     return scenario
 
 
-# ----------------------------------------------------------------------------- YAML
-def _parse_yaml(text, origin):
-    try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = f":{mark.line + 1}" if mark is not None else ""
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise ScenarioError(f"{origin}{line}: malformed YAML: {problem}") from None
-    if not isinstance(data, dict):
-        raise ScenarioError(f"{origin}: a scenario must be a YAML mapping of keys "
-                            f"(name, materials, modules, ...), got {type(data).__name__}")
-    lines = {}
-    _collect_lines(root, (), lines, origin)
-    return data, SourceMap(origin, lines)
-
-
-def _collect_lines(node, path, lines, origin):
-    lines.setdefault(path, node.start_mark.line + 1)
-    if isinstance(node, yaml.MappingNode):
-        seen = set()
-        for key_node, value_node in node.value:
-            key = key_node.value
-            if key in seen:
-                raise ScenarioError(f"{origin}:{key_node.start_mark.line + 1}: "
-                                    f"{_format_path(path + (key,), None)}: duplicate key")
-            seen.add(key)
-            lines[path + (key,)] = key_node.start_mark.line + 1
-            _collect_lines(value_node, path + (key,), lines, origin)
-    elif isinstance(node, yaml.SequenceNode):
-        for index, item in enumerate(node.value):
-            _collect_lines(item, path + (index,), lines, origin)
-
-
 # ----------------------------------------------------------------------------- errors
-def _first_error(exc, raw, sources):
-    # an unknown (misspelt) key explains a missing one next to it: report it first
+#: at most this many problems are listed (then a count of the rest)
+MAX_LISTED = 20
+
+
+def _all_errors(exc, raw, sources):
+    """Every problem, one line each; an unknown (misspelt) key first, since it explains a
+    missing one next to it."""
     errors = sorted(exc.errors(), key=lambda e: e["type"] != "extra_forbidden")
-    error = errors[0]
-    path = _data_path(error["loc"], raw)
-    message = _message(error, path)
-    more = f" (and {len(errors) - 1} more problem{'s' * (len(errors) > 2)})" if len(errors) > 1 else ""
-    return f"{sources.where(path)}: {_format_path(path, raw)}: {message}{more}"
+    lines = []
+    for error in errors[:MAX_LISTED]:
+        path = _data_path(error["loc"], raw)
+        line = f"{sources.where(path)}: {format_path(path, raw)}: {_message(error, path)}"
+        if line not in lines:
+            lines.append(line)
+    if len(errors) > MAX_LISTED:
+        lines.append(f"... and {len(errors) - MAX_LISTED} more problems")
+    return "\n".join(lines)
 
 
 def _data_path(loc, raw):
@@ -153,31 +131,28 @@ def _message(error, path):
     if kind == "extra_forbidden":
         key = path[-1] if path else error["loc"][-1]
         allowed = _allowed_keys(error["loc"][:-1])
-        return f"unknown key {key!r}{_suggest(key, allowed)}"
+        return f"unknown key {shorten(key)}{_suggest(key, allowed)}"
     if kind == "missing":
         return f"missing required key {error['loc'][-1]!r}"
     if kind == "union_tag_invalid":
         tag, expected = error["ctx"]["tag"], error["ctx"]["expected_tags"]
         options = [t.strip().strip("'") for t in expected.split(",")]
-        return f"{error['ctx']['discriminator'].strip(chr(39))} {tag!r} is not one of {expected}{_suggest(tag, options)}"
+        return f"{error['ctx']['discriminator'].strip(chr(39))} {shorten(tag)} is not one of {expected}{_suggest(tag, options)}"
     if kind == "union_tag_not_found":
         return f"missing key {error['ctx']['discriminator']}"
     if kind == "literal_error":
         given = error.get("input")
         options = [o.strip().strip("'") for o in error["ctx"]["expected"].replace(" or ", ",").split(",")]
-        return f"{given!r} is not allowed: expected {error['ctx']['expected']}{_suggest(str(given), options)}"
+        return f"{shorten(given)} is not allowed: expected {error['ctx']['expected']}{_suggest(str(given), options)}"
     if kind == "value_error":
         return msg.removeprefix("Value error, ")
     if kind == "finite_number":
         return "expected a finite number"
-    return f"{msg[0].lower()}{msg[1:]} (got {error.get('input')!r})"
+    return f"{msg[0].lower()}{msg[1:]} (got {shorten(error.get('input'))})"
 
 
 def _suggest(word, options):
-    close = difflib.get_close_matches(str(word), [str(o) for o in options], n=1, cutoff=0.5)
-    if close:
-        return f" (did you mean {close[0]!r}?)"
-    return f"; valid: {', '.join(sorted(map(str, options)))}" if options else ""
+    return did_you_mean(word, options, none="", listing="; valid: ")
 
 
 def _allowed_keys(loc):
@@ -232,19 +207,3 @@ def _unwrap(annotation):
             return annotation
 
 
-def _format_path(path, raw):
-    """``modules[bending].actuators[tca2].route.radius``: list items by name where they have one."""
-    text, node = "", raw
-    for part in path:
-        if isinstance(part, int):
-            item = node[part] if isinstance(node, list) and part < len(node) else None
-            name = item.get("name") if isinstance(item, dict) else None
-            text += f"[{name}]" if isinstance(name, str) else f"[{part}]"
-            node = item
-        else:
-            text += f".{part}" if text else str(part)
-            node = node.get(part) if isinstance(node, dict) else None
-    return text or "(top level)"
-
-
-format_path = _format_path

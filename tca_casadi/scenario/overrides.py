@@ -5,24 +5,23 @@ A path's first part is a top-level key, a module name or a load name; inside a m
 actuator name. Values are read as YAML (so ``100``, ``"45 mm"`` and ``[0, 0, 1]`` all work).
 """
 import copy
-
-import yaml
+import difflib
 
 from ..errors import ScenarioError
 from .checks import RESERVED, closest
+from .schema import Module
+from .sources import clip, shorten
+from .yaml_safe import parse_value
 
 
 def parse_override(text):
     """``"a.b=1"`` -> ``("a.b", 1)``."""
     if "=" not in text:
-        raise ScenarioError(f"--set {text}: expected PATH=VALUE, e.g. bending.tca2.temperature=100")
+        raise ScenarioError(f"--set {clip(text)}: expected PATH=VALUE, e.g. bending.tca2.temperature=100")
     path, value = text.split("=", 1)
-    try:
-        parsed = yaml.safe_load(value) if value.strip() else None
-    except yaml.YAMLError:
-        raise ScenarioError(f"--set {text}: cannot read the value {value!r}") from None
     if not path.strip():
-        raise ScenarioError(f"--set {text}: empty path")
+        raise ScenarioError(f"--set {clip(text)}: empty path")
+    parsed = parse_value(value, f"--set {clip(path.strip())}") if value.strip() else None
     return path.strip(), parsed
 
 
@@ -52,11 +51,20 @@ def resolve(raw, dotted):
                     actuator = _named(item.get("actuators"), rest[0])
                     if actuator is not None:
                         return _walk(raw, path + ("actuators", actuator), rest[1:], dotted)
+                    names = [a.get("name") for a in item.get("actuators") or [] if isinstance(a, dict)]
+                    if rest[0] not in Module.model_fields and not _close(rest[0], Module.model_fields):
+                        raise ScenarioError(
+                            f"--set {clip(dotted)}: module {head!r} has no actuator or key "
+                            f"{shorten(rest[0])}{closest(rest[0], names + list(Module.model_fields))}")
                 return _walk(raw, path, rest, dotted)
     names = [i.get("name") for k in ("modules", "loads", "objects") for i in (raw.get(k) or [])
              if isinstance(i, dict) and isinstance(i.get("name"), str)]
-    raise ScenarioError(f"--set {dotted}: {head!r} is not a top-level key, module, load or object"
+    raise ScenarioError(f"--set {clip(dotted)}: {shorten(head)} is not a top-level key, module, load or object"
                         f"{closest(head, list(RESERVED) + names)}")
+
+
+def _close(word, options):
+    return bool(difflib.get_close_matches(word, list(options), n=1, cutoff=0.75))
 
 
 def _named(items, name):
@@ -82,12 +90,12 @@ def _walk(raw, path, rest, dotted):
                 index = int(part)
             if index is None:
                 names = [i.get("name") for i in node if isinstance(i, dict)]
-                raise ScenarioError(f"--set {dotted}: no item {part!r}{closest(part, names)}")
+                raise ScenarioError(f"--set {clip(dotted)}: no item {shorten(part)}{closest(part, names)}")
             path, node = path + (index,), node[index]
         elif isinstance(node, dict) or node is None:
             path, node = path + (part,), (node or {}).get(part)
         else:
-            raise ScenarioError(f"--set {dotted}: cannot go inside the value at {part!r}")
+            raise ScenarioError(f"--set {clip(dotted)}: cannot go inside the value at {shorten(part)}")
     return path
 
 

@@ -132,6 +132,9 @@ class TcaType(Strict):
     pitch_angle: Annotated[float, _quantity("angle"), Field(gt=0, lt=math.pi / 2)]
     fiber_length: Optional[PositiveLength] = None
     reference_temperature: Temperature = 25.0
+    #: the range the law is used in: below 15 degC the paper's untwist fit nears its vertex
+    #: (10.4 degC), under which it would make a cooled TCA contract; above 150 degC nylon softens
+    min_temperature: Temperature = 15.0
     max_temperature: Temperature = 150.0
     untwist: UntwistFit = Field(default_factory=UntwistFit)
     shear_modulus: ShearModulusFit = Field(default_factory=ShearModulusFit)
@@ -143,6 +146,8 @@ class TcaType(Strict):
                              f"fiber_radius ({self.fiber_radius * 1e3:g} mm)")
         if self.max_temperature <= self.reference_temperature:
             raise ValueError("max_temperature must be above reference_temperature")
+        if self.min_temperature > self.reference_temperature:
+            raise ValueError("min_temperature must not be above reference_temperature")
         return self
 
 

@@ -3,7 +3,6 @@
 Positions are compared at identical arc lengths (the shooting solver also samples at the
 collocation nodes), so no interpolation error enters the comparison.
 """
-import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -54,9 +53,9 @@ class CheckReport:
         return data
 
     def save(self, path):
+        from ..output import write_json
         Path(path).parent.mkdir(parents=True, exist_ok=True)
-        Path(path).write_text(json.dumps(self.to_dict(), indent=2))
-        return Path(path)
+        return write_json(path, self.to_dict())
 
     def summary(self):
         a, b = self.methods

@@ -118,12 +118,12 @@ class InverseResult:
     def save(self, directory, plot=True):
         """Write ``inverse.json``, the forward ``solution.json`` + ``arrays.npz`` and, with
         ``plot``, ``inverse.png`` (the robot, the target and the reached point)."""
-        import json
         from pathlib import Path
+
+        from ..output import write_json
         directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
-        path = directory / "inverse.json"
-        path.write_text(json.dumps(self.to_dict(), indent=2))
+        path = write_json(directory / "inverse.json", self.to_dict())
         written = [path, *self.forward.save(directory)]
         if plot:
             from ..plotting import save_robot_png
@@ -175,6 +175,8 @@ class InverseStatics:
         self.bounds = self._bounds(bounds)
         self.tolerance, self.angle_tolerance = float(tolerance), float(angle_tolerance)
         self.regularisation, self.orientation_weight = float(regularisation), float(orientation_weight)
+        if int(starts) < 1:
+            raise ScenarioError(f"starts (--starts) must be at least 1, got {starts}")
         self.starts = int(starts)
         self._forward_cache = {}
         self.length = sum(m.length for m in self.robot.modules)
@@ -330,6 +332,11 @@ class InverseStatics:
                 best = attempt
             if best is not None and self._reached(best):
                 break
+        if tried == 0:       # no start has a forward equilibrium: try from the reference shape
+            from ..solvers.guess import reference_guess
+            tau0 = self.start_points()[0]
+            attempt = self._attempt(reference_guess(self.solver.nlp, self.params_at(tau0)), tau0, vector, target)
+            iterations, tried = iterations + attempt["iterations"], 1
         if best is None:
             best = attempt
         return self._result(target, best, time.perf_counter() - started, iterations, tried)
@@ -484,18 +491,17 @@ def _take(row, columns, keys):
 
 def write_path_results(path, results):
     """One row per target: target, temperatures, achieved position, errors, status, time."""
-    import csv
-    with open(path, "w", newline="") as handle:
-        writer = csv.writer(handle)
-        temperature_names = list(results[0].temperatures)
-        writer.writerow(["row", "target_x [m]", "target_y [m]", "target_z [m]"]
-                        + [f"{name} [degC]" for name in temperature_names]
-                        + ["x [m]", "y [m]", "z [m]", "position_error [m]", "angle_error [deg]",
-                           "reachable", "verified", "solve_time [s]", "iterations"])
-        for index, r in enumerate(results):
-            angle = "" if r.angle_error is None else f"{np.degrees(r.angle_error):.8g}"
-            writer.writerow([index, *(f"{v:.10g}" for v in r.target.position),
-                             *(f"{r.temperatures[n]:.8g}" for n in temperature_names),
-                             *(f"{v:.10g}" for v in r.position), f"{r.position_error:.4g}", angle,
-                             int(r.reachable), int(r.verified), f"{r.solve_time_s:.4g}", r.iterations])
-    return path
+    from ..output import write_csv
+    temperature_names = list(results[0].temperatures)
+    header = (["row", "target_x [m]", "target_y [m]", "target_z [m]"]
+              + [f"{name} [degC]" for name in temperature_names]
+              + ["x [m]", "y [m]", "z [m]", "position_error [m]", "angle_error [deg]",
+                 "reachable", "verified", "solve_time [s]", "iterations"])
+    rows = []
+    for index, r in enumerate(results):
+        angle = "" if r.angle_error is None else f"{np.degrees(r.angle_error):.8g}"
+        rows.append([index, *(f"{v:.10g}" for v in r.target.position),
+                     *(f"{r.temperatures[n]:.8g}" for n in temperature_names),
+                     *(f"{v:.10g}" for v in r.position), f"{r.position_error:.4g}", angle,
+                     int(r.reachable), int(r.verified), f"{r.solve_time_s:.4g}", r.iterations])
+    return write_csv(path, header, rows)

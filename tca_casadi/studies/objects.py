@@ -138,3 +138,14 @@ class ObjectTracker:
         long_axis = pose.rotation[:, int(np.argmax(pose.size))]
         cosine = abs(across @ long_axis) / max(np.linalg.norm(across), 1e-15)
         return float(np.degrees(np.arccos(min(1.0, cosine))))
+
+
+def object_poses(scenario, robot, solution):
+    """The scenario's objects as drawn with one solution: picked up where its parameters hold
+    them and the grasp closes on them, else resting where the scenario puts them."""
+    from ..errors import ScenarioError
+    tracker = ObjectTracker(scenario, robot)
+    try:
+        return list(tracker.advance(solution, "solve").values())
+    except ScenarioError:
+        return list(tracker.poses.values())

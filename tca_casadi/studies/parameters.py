@@ -125,3 +125,17 @@ def resolve_parameters(robot, params, paths):
             raise ScenarioError(f"{p.path!r} and {seen[key]!r} are the same parameter")
         seen[key] = p.path
     return resolved
+
+
+def check_range(robot, parameter, *values):
+    """A TCA temperature swept or varied outside its type's validated range is an error (the
+    same bounds as the scenario's ``min_temperature`` / ``max_temperature``)."""
+    if parameter.kind != "temperature":
+        return
+    actuator = next(a for a in robot.actuators if a.parameter == parameter.name)
+    law = actuator.law
+    for value in np.ravel(values):
+        if not law.min_temperature <= value <= law.max_temperature:
+            raise ScenarioError(f"{parameter.path}: {value:g} degC is outside the TCA type's validated "
+                                f"range [{law.min_temperature:g}, {law.max_temperature:g}] degC "
+                                "(min_temperature, max_temperature of its tca_types entry)")

@@ -5,7 +5,6 @@ continuation from the previous parameters, so a step never jumps branches. Scena
 are picked, carried and put down as the steps set their ``held`` flags (:mod:`.objects`); with
 ``check=True`` every step is also solved by shooting and compared.
 """
-import csv
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,6 +35,7 @@ class SequenceResult:
     openings: list = field(default_factory=list)      # per step: gripper opening [m] or None
     checks: list = field(default_factory=list)        # per step: CheckReport (check=True)
     warnings: list = field(default_factory=list)
+    stage: list = field(default_factory=list)         # per step: how an external stage moved the base ("" if not)
 
     @property
     def converged(self):
@@ -54,6 +54,10 @@ class SequenceResult:
             for axis, value in zip("xyz", solution.tip_position):
                 row[f"tip_{axis} [m]"] = value
             row["tip_yaw [deg]"] = tip_yaw(solution)
+            base = solution.modules[0].p[:, 0]
+            for axis, value in zip("xyz", base):
+                row[f"base_{axis} [m]"] = value
+            row["base_moved_by"] = "external stage" if self.stage and self.stage[index] else ""
             row["bending_angle [deg]"] = np.degrees(bending_angle(solution))
             if self.openings and self.openings[index] is not None:
                 row["gripper_opening [m]"] = self.openings[index]
@@ -73,14 +77,12 @@ class SequenceResult:
         return out
 
     def to_csv(self, path):
+        from ..output import write_csv
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         rows = self.rows()
-        with Path(path).open("w", newline="") as handle:
-            writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
-            writer.writeheader()
-            for row in rows:
-                writer.writerow({k: (f"{v:.10g}" if isinstance(v, float) else v) for k, v in row.items()})
-        return Path(path)
+        header = list(rows[0])
+        return write_csv(path, header, [[f"{v:.10g}" if isinstance(v, float) else v
+                                         for v in (row.get(k, "") for k in header)] for row in rows])
 
     def summary(self):
         state = "all converged" if self.converged else "NOT ALL CONVERGED"
@@ -98,6 +100,8 @@ class SequenceResult:
             for pose in (self.objects[index] if self.objects else {}).values():
                 c = pose.center * 1e3
                 extra += f"  {pose.name} {'held' if pose.held else 'rests'} at {c[0]:+.1f} {c[1]:+.1f} {c[2]:+.1f}"
+            if self.stage and self.stage[index]:
+                extra += f"  ({self.stage[index]})"
             lines.append(f"  {name:<28} tip [mm] {tip[0]:+8.3f} {tip[1]:+8.3f} {tip[2]:+8.3f}  "
                          f"yaw {tip_yaw(solution):+7.2f} deg{extra}{flag}")
         lines += [f"  warning: {w}" for w in self.warnings]
@@ -131,6 +135,7 @@ def run_sequence(sim, steps=None, frames_per_step=0, progress=None, check=False)
         for path, value in values.items():
             sim.set(path, value)
         solution, transition = _solve_step(sim, before, previous, frames_per_step)
+        result.stage.append(stage_motion(sim.robot, before, sim.params))
         result.names.append(name)
         result.solutions.append(solution)
         result.transitions.append(transition)
@@ -143,6 +148,19 @@ def run_sequence(sim, steps=None, frames_per_step=0, progress=None, check=False)
             progress((index + 1) / len(steps), name)
     result.total_time_s = time.perf_counter() - started
     return result
+
+
+def stage_motion(robot, before, after):
+    """How a step moved the robot's base, as text (``""`` if it did not): the base is carried by
+    an external stage (a positioner), not by any actuator of the robot."""
+    moved = after[robot.layout["base.position"]] - before[robot.layout["base.position"]]
+    turned = np.any(after[robot.layout["base.quaternion"]] != before[robot.layout["base.quaternion"]])
+    parts = []
+    if np.any(moved):
+        parts.append("moves the base by [" + ", ".join(f"{v * 1e3:+.3g}" for v in moved) + "] mm")
+    if turned:
+        parts.append("turns the base")
+    return ("external stage " + " and ".join(parts)) if parts else ""
 
 
 def _track_objects(result, tracker, solution, name):

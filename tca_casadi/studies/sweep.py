@@ -26,7 +26,7 @@ import scipy.sparse.linalg as spla
 
 from ..errors import ScenarioError
 from ..solvers.continuation import BranchFollower
-from .parameters import resolve_parameters
+from .parameters import check_range, resolve_parameters
 from .sweep_result import SweepResult, find_events
 
 log = logging.getLogger(__name__)
@@ -70,6 +70,8 @@ class Sweep:
         self.parameters = resolve_parameters(sim.robot, sim.params, list(paths))
         self.start = self._values(start, "start")
         self.stop = self._values(stop, "stop")
+        for parameter, a, b in zip(self.parameters, self.start, self.stop):
+            check_range(sim.robot, parameter, a, b)
         base = sim.params.copy()
         for parameter, value in zip(self.parameters, self.start):
             base = parameter.with_value(base, value)
@@ -136,8 +138,8 @@ class Sweep:
         for index in range(1, self.steps):
             current, h, substeps, failure = self.follower.advance(
                 current, index * spacing, h, spacing, self.min_step)
-            if failure is not None:
-                return False, self._stalled(points[0], self._record(current), failure)
+            if failure is not None:                 # current is the last accepted point
+                return False, self._stalled(points[0], points[-1], failure)
             points.append(self._record(current, substeps))
             _report(progress, points[-1], self)
         return True, f"completed {self.steps} steps"

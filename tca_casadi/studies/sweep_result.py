@@ -1,12 +1,11 @@
 """The result of a sweep: the accepted points, the events along the branch, a CSV table."""
-import csv
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..model.rotations import matrix_to_quaternion
+from ..output import write_csv, write_json
 
 
 @dataclass
@@ -72,13 +71,8 @@ class SweepResult:
 
     def to_csv(self, path):
         rows = self.rows()
-        path = Path(path)
-        with path.open("w", newline="") as handle:
-            writer = csv.DictWriter(handle, fieldnames=list(rows[0]) if rows else ["step"])
-            writer.writeheader()
-            for row in rows:
-                writer.writerow({k: _format(v) for k, v in row.items()})
-        return path
+        header = list(rows[0]) if rows else ["step"]
+        return write_csv(path, header, [[_format(row.get(k, "")) for k in header] for row in rows])
 
     def to_dict(self):
         return {"method": self.method, "completed": self.completed, "message": self.message,
@@ -90,8 +84,7 @@ class SweepResult:
         ``sweep.png`` and ``sweep_robots.png``; return the paths."""
         directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
-        written = [self.to_csv(directory / "sweep.csv"), directory / "sweep.json"]
-        written[1].write_text(json.dumps(self.to_dict(), indent=2))
+        written = [self.to_csv(directory / "sweep.csv"), write_json(directory / "sweep.json", self.to_dict())]
         if plots and self.points:
             from ..plotting.sweep_plots import plot_sweep, plot_sweep_robots
             written.append(plot_sweep(self, directory / "sweep.png"))

@@ -1,0 +1,218 @@
+"""Every bad input is answered cleanly: exit code 2 and one line per problem naming the file,
+line and key, never a traceback; and nothing is computed before the output can be written.
+Each case is an input a user or a fuzzer really tried (issue 13)."""
+import json
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from tca_casadi import cli
+
+BENDING = "scenarios/bending_module.yaml"
+
+
+def run(capsys, *argv):
+    """``(exit code, stdout, stderr)`` of the CLI run in this process."""
+    code = cli.main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def one_error_line(err):
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("error: ") and "Traceback" not in err, err
+    assert len(lines[0]) < 400, lines[0]
+    return lines[0]
+
+
+@pytest.fixture
+def bending(scenarios):
+    return scenarios / "bending_module.yaml"
+
+
+@pytest.fixture
+def no_solving(monkeypatch):
+    """Fail the test if anything is solved (bad output paths must be refused before)."""
+    from tca_casadi.simulation import Simulation
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("solved before checking the output directory")
+    monkeypatch.setattr(Simulation, "solve", refuse)
+    monkeypatch.setattr(Simulation, "solve_at", refuse)
+
+
+# ----------------------------------------------------------------------------- files
+def test_a_binary_file(capsys, tmp_path):
+    path = tmp_path / "robot.yaml"
+    path.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\xff\xfe")
+    code, _, err = run(capsys, "validate", path)
+    assert code == 2
+    assert "not a text (UTF-8) file" in one_error_line(err)
+
+
+def test_a_yaml_alias_bomb_is_refused_fast(capsys, tmp_path):
+    lines = ["a: &a [x, x, x, x, x, x, x, x, x]"]
+    lines += [f"{chr(98 + i)}: &{chr(98 + i)} [" + ", ".join([f"*{chr(97 + i)}"] * 9) + "]" for i in range(9)]
+    path = tmp_path / "bomb.yaml"
+    path.write_text("\n".join(lines) + "\n")
+    code, _, err = run(capsys, "solve", path)
+    assert code == 2
+    assert "aliases are expanded" in one_error_line(err)
+
+
+@pytest.mark.parametrize("text", ["a: " + "[" * 5000 + "]" * 5000, "a: &x [1, *x]",
+                                  "a: !!python/object/apply:os.system ['true']"])
+def test_deep_recursive_and_python_tagged_yaml(capsys, tmp_path, text):
+    path = tmp_path / "bad.yaml"
+    path.write_text(text + "\n")
+    code, _, err = run(capsys, "validate", path)
+    assert code == 2
+    one_error_line(err)
+
+
+def test_deep_nesting_in_a_set_value(capsys, bending):
+    code, _, err = run(capsys, "validate", bending, "--set", "bending.length=" + "[" * 3000)
+    assert code == 2
+    assert "nested" in one_error_line(err)
+
+
+@pytest.mark.parametrize("name, message", [("scenarios/bending_module", "no such scenario file"),
+                                           ("scenarios", "is a directory")])
+def test_missing_path_or_directory(capsys, name, message):
+    code, _, err = run(capsys, "solve", name)
+    assert code == 2
+    assert message in one_error_line(err)
+
+
+@pytest.mark.parametrize("override, fragment", [
+    ("bending.cross_section.diameter=1e300", "out of range"),
+    ("bending.length=" + "9" * 400, "too large"),
+    ("bending.tca1.temperature=1 1/0", "cannot read the unit '1/0'"),
+    ("bending.tca1.temperature=5 m)", "cannot read the unit 'm)'"),
+    ("bending.length='5 mm" + " " * 100_000 + "x'", "longer than 200 characters"),
+    ("bending.length=" + "x" * 5000, "bending"),
+    ("bending.tca2.temperature=200", "above the TCA type's max_temperature (150 degC)"),
+    ("bending.tca2.temperature=5", "below the TCA type's min_temperature (15 degC)"),
+    ("bending.tca9.temperature=1", "no actuator or key 'tca9' (did you mean 'tca3'?)"),
+])
+def test_bad_values_give_one_short_line(capsys, bending, override, fragment):
+    started = time.perf_counter()
+    code, _, err = run(capsys, "validate", bending, "--set", override)
+    assert code == 2
+    assert fragment in one_error_line(err)
+    assert time.perf_counter() - started < 30     # refused, not computed (generous: loaded CI)
+
+
+def test_trailing_spaces_are_read_in_linear_time(bending):
+    """The unit regex was quadratic: 40 000 spaces after a quantity took 16 s."""
+    from tca_casadi.units import to_si
+    started = time.perf_counter()
+    assert to_si("5 mm" + " " * 100_000, "length") == pytest.approx(0.005, rel=1e-12)
+    assert time.perf_counter() - started < 5
+
+
+def test_every_problem_is_listed_one_per_line(capsys, bending):
+    code, _, err = run(capsys, "validate", bending, "--set", "bending.length=-1",
+                       "--set", "bending.cross_section.diameter=0")
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 2 and all(line.startswith("error: ") for line in lines), err
+    assert "length" in err and "diameter" in err and "more problem" not in err
+
+
+def test_a_temperature_beyond_the_range_in_a_sweep(capsys, bending):
+    code, _, err = run(capsys, "sweep", bending, "--param", "bending.tca2.temperature", "--from", 25,
+                       "--to", 300, "--steps", 3)
+    assert code == 2
+    assert "validated range [15, 150] degC" in one_error_line(err)
+
+
+@pytest.mark.parametrize("starts", ["0", "-3"])
+def test_inverse_needs_a_start(capsys, bending, starts):
+    code, _, err = run(capsys, "inverse", bending, "--starts", starts)
+    assert code == 2
+    assert "at least 1" in one_error_line(err)
+
+
+# ----------------------------------------------------------------------------- outputs
+def test_output_under_a_file_or_naming_a_file(capsys, bending, tmp_path, no_solving):
+    afile = tmp_path / "afile"
+    afile.write_text("keep me")
+    for target, fragment in ((afile, "not a directory"), (afile / "sub", "cannot write results there")):
+        for command in (["solve", bending], ["sweep", bending, "--param", "bending.tca2.temperature",
+                                             "--from", 25, "--to", 30]):
+            code, _, err = run(capsys, *command, "-o", target)
+            assert code == 2
+            assert fragment in one_error_line(err)
+    assert afile.read_text() == "keep me"
+
+
+def test_output_holding_a_directory_named_like_a_result(capsys, bending, tmp_path, no_solving):
+    (tmp_path / "solution.json").mkdir()
+    code, _, err = run(capsys, "solve", bending, "-o", tmp_path)
+    assert code == 2
+    assert "solution.json is a directory" in one_error_line(err)
+
+
+@pytest.mark.parametrize("target", ["bad\x00name", "/".join(["a"] * 3000)])
+def test_impossible_output_paths(capsys, bending, tmp_path, monkeypatch, no_solving, target):
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run(capsys, "solve", bending, "-o", target)
+    assert code == 2
+    assert "cannot write results there" in one_error_line(err)
+
+
+@pytest.mark.parametrize("name, directory", [("../../escaped", "escaped"), ("/etc/passwd", "etc_passwd"),
+                                             ("..", "scenario")])
+def test_a_scenario_name_never_chooses_a_directory_outside_results(capsys, bending, tmp_path, monkeypatch,
+                                                                   name, directory):
+    monkeypatch.chdir(tmp_path)
+    code, _, _ = run(capsys, "solve", bending.resolve(), "--set", f"name={name}", "--no-plot")
+    assert code == 0
+    written = sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*") if p.is_file())
+    assert written == [f"results/{directory}/arrays.npz", f"results/{directory}/solution.json"]
+
+
+def test_no_plot_removes_an_earlier_drawing(capsys, bending, tmp_path):
+    (tmp_path / "robot.png").write_bytes(b"an older run's picture")
+    code, _, _ = run(capsys, "solve", bending, "-o", tmp_path, "--no-plot")
+    assert code == 0
+    assert not (tmp_path / "robot.png").exists()
+    assert json.loads((tmp_path / "solution.json").read_text())["converged"] is True
+
+
+# ----------------------------------------------------------------------------- failures
+def test_a_failed_solve_reports_the_users_inputs_and_how_far_it_got(capsys, bending, tmp_path):
+    code, out, _ = run(capsys, "solve", bending, "--set", "tip_force.force=[0, 0, 5]", "-o", tmp_path,
+                       "--no-plot")
+    assert code == 1
+    assert "NOT CONVERGED" in out
+    table = [line.split() for line in out.splitlines() if line.strip().startswith("bending.tca")]
+    assert [row[1] for row in table] == ["25.0", "100.0", "100.0"]         # as given, not ramped
+    assert "stalled at lambda = " in out and "of 1" in out and "bending.tca2.temperature" in out
+    assert "max scaled residual at the requested parameters" in out
+    saved = json.loads((tmp_path / "solution.json").read_text())
+    assert saved["converged"] is False and saved["max_residual"] > 1e-6
+
+
+def test_a_sweep_whose_first_step_fails_reports_and_writes(capsys, bending, tmp_path):
+    code, out, err = run(capsys, "sweep", bending, "--param", "gravity.magnitude", "--from", 9.81,
+                         "--to", "1e7", "--steps", 2, "--min-step", 0.5, "-o", tmp_path, "--quiet")
+    assert code == 1, err
+    assert "stopped at gravity.magnitude = 9.81" in out
+    assert (tmp_path / "sweep.csv").read_text().count("\n") == 2         # header + the start
+    assert json.loads((tmp_path / "sweep.json").read_text())["completed"] is False
+
+
+def test_ctrl_c_during_start_up_exits_130_with_one_line(scenarios):
+    process = subprocess.Popen([sys.executable, "-m", "tca_casadi.cli", "check", str(scenarios / "arm.yaml")],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(1.0)
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=60)
+    assert process.returncode == 130, err
+    assert err.strip().splitlines()[-1].startswith("interrupted") and "Traceback" not in err, err

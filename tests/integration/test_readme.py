@@ -1,0 +1,147 @@
+"""The README is true to the letter: every fenced example runs verbatim from a copy of the
+repository, shown outputs match (``...`` stands for what varies between runs), error examples
+match exactly, the command-line synopsis matches ``--help``, and every dotted path used in an
+example names something in a shipped scenario.
+
+Long runs (the test command itself, installs, benchmarks, the arm's ``--check`` sequence) are
+listed in ``SKIPPED`` and run elsewhere (CI, ``scripts/``)."""
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tca_casadi import cli
+
+ROOT = Path(__file__).resolve().parents[2]
+README = (ROOT / "README.md").read_text()
+
+#: commands not run here, by what they start with or contain
+SKIPPED = ("pip install", "python3 -m venv", "python -m pytest", "python scripts/bench.py",
+           "bash .ci/run", "--check")
+
+
+def _all_blocks():
+    """``[(language, text)]`` of every fenced block, in order."""
+    blocks, current, language = [], None, None
+    for line in README.splitlines():
+        if line.startswith("```"):
+            if current is None:
+                current, language = [], line[3:].strip()
+            else:
+                blocks.append((language, "\n".join(current) + "\n"))
+                current = None
+        elif current is not None:
+            current.append(line)
+    return blocks
+
+
+def _blocks(language):
+    return [text for kind, text in _all_blocks() if kind == language]
+
+
+def _transcripts():
+    """``(command, expected output lines)`` of every ``$ tca-casadi`` line in plain blocks."""
+    out = []
+    for block in _blocks(""):
+        lines = block.splitlines()
+        for k, line in enumerate(lines):
+            if line.startswith("$ "):
+                expected = []
+                for following in lines[k + 1:]:
+                    if following.startswith("$ "):
+                        break
+                    expected.append(following)
+                command = line[2:].split("  #")[0].strip()
+                out.append((command, expected))
+    return out
+
+
+def _skipped(command):
+    return any(part in command for part in SKIPPED)
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory):
+    """A copy of the repository's scenarios and scripts, as a fresh clone has them."""
+    directory = tmp_path_factory.mktemp("readme")
+    for name in ("scenarios", "scripts"):
+        shutil.copytree(ROOT / name, directory / name)
+    return directory
+
+
+def _matches(expected, actual):
+    pattern = "^" + ".*".join(re.escape(part) for part in expected.split("...")) + "$"
+    return re.match(pattern, actual) is not None
+
+
+@pytest.mark.parametrize("command, expected", [t for t in _transcripts() if not _skipped(t[0])],
+                         ids=lambda value: value if isinstance(value, str) else "")
+def test_transcript(workdir, command, expected):
+    argv = shlex.split(command)
+    assert argv[0] == "tca-casadi"
+    result = subprocess.run([sys.executable, "-m", "tca_casadi.cli", *argv[1:]], cwd=workdir,
+                            capture_output=True, text=True, timeout=600)
+    output = (result.stdout + result.stderr).rstrip("\n").splitlines()
+    errors = [line for line in expected if line.startswith("error:")]
+    if errors:
+        assert result.returncode == 2 and output == errors, "\n".join(output)
+        return
+    assert result.returncode in (0, 1), result.stderr
+    for line in expected:
+        assert any(_matches(line, got) for got in output), f"{line!r} not in:\n" + "\n".join(output)
+
+
+@pytest.mark.parametrize("block", [b for b in _blocks("bash")],
+                         ids=lambda b: b.strip().splitlines()[0][:60])
+def test_shell_block(workdir, block):
+    for command in [c for c in block.strip().splitlines() if c and not c.startswith("#")]:
+        if _skipped(command):
+            continue
+        result = subprocess.run(command.replace("tca-casadi ", f"{sys.executable} -m tca_casadi.cli ")
+                                .replace("python ", f"{sys.executable} ", 1),
+                                shell=True, cwd=workdir, capture_output=True, text=True, timeout=900)
+        assert result.returncode == 0, f"{command}\n{result.stdout[-2000:]}\n{result.stderr[-2000:]}"
+
+
+@pytest.mark.parametrize("index", range(len(_blocks("python"))))
+def test_python_block(workdir, index, monkeypatch):
+    monkeypatch.chdir(workdir)
+    code = _blocks("python")[index]
+    exec(compile(code, f"README.md python block {index}", "exec"), {"__name__": "readme"})
+
+
+def test_synopsis_matches_help():
+    """Every option a subcommand takes appears in its synopsis line, and no other."""
+    block = next(b for b in _blocks("") if b.startswith("tca-casadi [-v] validate"))
+    synopsis = {}
+    for line in block.splitlines():
+        words = line.split()
+        if words[:2] == ["tca-casadi", "[-v]"]:
+            command = words[2]
+        synopsis[command] = synopsis.get(command, "") + " " + line
+    parser = cli.build_parser()
+    commands = parser._subparsers._group_actions[0].choices
+    assert set(synopsis) == set(commands)
+    for name, sub in commands.items():
+        shown = set(re.findall(r"(?<![\w-])--?[a-z][a-z-]*", synopsis[name])) - {"-v"}
+        actions = [set(a.option_strings) for a in sub._actions if a.option_strings and "--help" not in a.option_strings]
+        assert all(options & shown for options in actions), (name, [o for o in actions if not o & shown])
+        assert shown <= set().union(*actions), (name, shown - set().union(*actions))
+
+
+def test_dotted_paths_in_examples_exist():
+    """``--set``/``--param`` paths and sequence keys used in examples name things that exist in
+    the shipped scenarios (module, actuator, load and object names, or top-level keys)."""
+    from tca_casadi.scenario import load_scenario
+    names = set()
+    for path in (ROOT / "scenarios").rglob("*.yaml"):
+        scenario = load_scenario(path)
+        names |= {m.name for m in scenario.modules} | {load.name for load in scenario.loads}
+        names |= {o.name for o in scenario.objects}
+    names |= {"name", "gravity", "base", "solver", "materials", "tca_types"}
+    used = re.findall(r"--(?:set|param) \"?([A-Za-z_][\w]*)\.", README)
+    assert used and set(used) <= names, set(used) - names

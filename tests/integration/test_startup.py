@@ -1,0 +1,32 @@
+"""``tca-casadi --help`` and ``validate`` start without loading the numerical libraries (the
+time they take is measured in scripts/bench.py, not here)."""
+import subprocess
+import sys
+
+HEAVY = ("casadi", "matplotlib", "scipy.integrate", "scipy.optimize", "scipy.sparse", "scipy.interpolate")
+
+PROBE = """
+import sys
+from tca_casadi import cli
+code = cli.main({argv!r})
+print("LOADED", [m for m in {heavy!r} if m in sys.modules], code)
+"""
+
+
+def _loaded(argv, cwd):
+    result = subprocess.run([sys.executable, "-c", PROBE.format(argv=argv, heavy=HEAVY)], cwd=cwd,
+                            capture_output=True, text=True, check=True)
+    line = [line for line in result.stdout.splitlines() if line.startswith("LOADED")][-1]
+    return line
+
+
+def test_validate_loads_no_numerical_library(scenarios):
+    for name in ("bending_module", "arm_pick_and_place", "tendon_robot_two_segments"):
+        assert _loaded(["validate", str(scenarios / f"{name}.yaml")], scenarios) == "LOADED [] 0"
+
+
+def test_help_loads_no_numerical_library(scenarios):
+    probe = PROBE.replace("code = cli.main({argv!r})", "code = cli.build_parser().format_help() and 0")
+    result = subprocess.run([sys.executable, "-c", probe.format(argv=[], heavy=HEAVY)],
+                            capture_output=True, text=True, check=True)
+    assert result.stdout.strip().endswith("LOADED [] 0"), result.stdout
