@@ -2,7 +2,6 @@
 absent, the previous complete one, or the new complete one (writes go to a temporary file in the
 same directory, then are renamed over the target)."""
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -11,7 +10,6 @@ import time
 import numpy as np
 import pytest
 
-from tca_casadi.output import atomic_path, prepare_directory, write_text
 
 PNG_END = b"IEND\xaeB`\x82"
 
@@ -59,20 +57,3 @@ def _kill_runs(command, directory, seed, runs=8):
 def test_killed_runs_leave_complete_files(tmp_path, command, seed):
     directory = tmp_path / "out"
     _kill_runs([sys.executable, "-m", "tca_casadi.cli", *command, "-o", str(directory)], directory, seed)
-
-
-def test_a_failed_write_keeps_the_previous_file(tmp_path):
-    target = write_text(tmp_path / "result.json", '{"run": 1}')
-    with pytest.raises(RuntimeError):
-        with atomic_path(target) as temporary:
-            temporary.write_text('{"run": 2, "trunc')
-            raise RuntimeError("killed while writing")
-    assert json.loads(target.read_text()) == {"run": 1}
-    assert sorted(os.listdir(tmp_path)) == ["result.json"]
-
-
-def test_leftovers_of_a_killed_run_are_removed(tmp_path):
-    (tmp_path / ".solution.abc123.json").write_text("{")
-    (tmp_path / "robot.png").write_bytes(b"old")
-    prepare_directory(tmp_path, ["solution.json", "robot.png"], stale=["robot.png"])
-    assert os.listdir(tmp_path) == []
