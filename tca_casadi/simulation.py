@@ -17,6 +17,7 @@ from .scenario import load_scenario
 from .scenario.loader import validate
 from .scenario.overrides import apply_overrides
 from .solvers import CollocationSolver, ShootingSolver
+from .solvers import accuracy
 from .solvers.continuation import BranchFollower
 
 log = logging.getLogger(__name__)
@@ -80,13 +81,18 @@ class Simulation:
             self._solvers[method] = SOLVERS[method](self.robot, self.scenario.solver)
         return self._solvers[method]
 
-    def solve(self, warm_start=None, method=None, continuation=None):
+    def solve(self, warm_start=None, method=None, continuation=None, refine=True):
         """Equilibrium at the current parameters.
 
         ``warm_start``: a previous Solution, or ``"last"``. ``continuation`` (default from the
         scenario): ``"auto"`` follows the loads up from the unloaded reference state on a cold start
         (SPEC section 6: a direct cold solve may land on a branch where TCAs push) and, after a warm
         start that fails or leaves a TCA in compression; ``"always"``; ``"never"`` (direct solve).
+
+        A cold collocation solve carries an error estimate (``solution.accuracy``); with
+        ``refine`` and ``solver.refine: auto`` the mesh is refined where the error is until the
+        tip and tensions meet ``solver.tip_tolerance`` / ``tension_tolerance``, and the refined
+        solver is kept for later solves (sweeps, inverse statics).
         """
         solver = self.solver(method)
         continuation = continuation or self.scenario.solver.continuation
@@ -99,6 +105,9 @@ class Simulation:
             solution = solver.solve(self.params, initial)
             if continuation == "auto" and _needs_continuation(solution):
                 solution = _better(solution, self.continue_from_rest(solver))
+        if initial is None and solution.converged and getattr(solver, "higher", None) is not None:
+            solver, solution, _ = accuracy.control(solver, solution, self.params, refine)
+            self._solvers[method or self.method] = solver
         self.last = solution
         return solution
 
@@ -108,7 +117,7 @@ class Simulation:
         saved, last = self.params.copy(), self.last
         try:
             self.params = np.array(params, dtype=float)
-            return self.solve(method=method)
+            return self.solve(method=method, refine=False)
         finally:
             self.params, self.last = saved, last
 

@@ -97,6 +97,7 @@ class Solution:
     tip_module: int = -1      # index of the module whose tip is "the tip" (Robot.tip_index)
     balance: Optional[object] = None   # model.balance.GlobalBalance of the whole robot
     loads: list = field(default_factory=list)   # point loads and masses: {name, kind, position, force}
+    accuracy: Optional[object] = None  # solvers.accuracy.AccuracyEstimate (cold collocation solves)
 
     # ------------------------------------------------------------------ tip
     @property
@@ -143,6 +144,7 @@ class Solution:
                             for name, sl in self.parameter_names.items()}
                            if self.parameter_names is not None else {}),
             "global_balance": self.balance.as_dict() if self.balance is not None else None,
+            "accuracy": self.accuracy.as_dict() if self.accuracy is not None else None,
             "warnings": list(self.warnings),
         }
 

@@ -32,7 +32,7 @@ def solve(scenario):
     return solution
 
 
-def mixed_chain(intervals):
+def mixed_chain(intervals, refine="auto"):
     chain = robot([rod("bend", "30 mm", [tca("a", "0 deg", 80), tca("b", "180 deg", 25)]),
                    rod("twist", "16 mm", [{"name": "h", "kind": "tca", "type": "nylon", "temperature": 90,
                                            "route": {"kind": "helix", "radius": "3.5 mm", "turns": 3,
@@ -42,4 +42,5 @@ def mixed_chain(intervals):
                                                                                 [0.02, 0.0, 0.002]]}}])],
                   loads=[{"name": "payload", "kind": "mass", "module": "tail", "mass": "1 g"}])
     chain["solver"]["intervals"] = intervals
+    chain["solver"]["refine"] = refine
     return Simulation.from_file(chain)

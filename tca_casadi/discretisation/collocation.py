@@ -41,10 +41,11 @@ class CollocationNLP:
     ``outputs`` (Function ``(w, P) -> (lengths, ends, base_wrenches)``), ``meshes``.
     """
 
-    def __init__(self, robot, intervals=12, degree=4, scheme="legendre"):
+    def __init__(self, robot, intervals=12, degree=4, scheme="legendre", meshes=None):
         self.robot = robot
         self.scheme = CollocationScheme.create(degree, scheme)
-        self.meshes = [build_mesh(robot, m, intervals) for m in range(len(robot.modules))]
+        self.meshes = list(meshes) if meshes is not None else \
+            [build_mesh(robot, m, intervals) for m in range(len(robot.modules))]
         self._declare_variables()
         self.P = ca.MX.sym("P", robot.layout.size)
         self._g, self._lengths = [], [0] * len(robot.actuators)

@@ -52,6 +52,13 @@ class ModuleMesh:
         """Arc length of every node, shape (n_intervals, d+1)."""
         return np.array([s0 + scheme.tau * (s1 - s0) for s0, s1 in self.intervals])
 
+    def bisected(self, flags):
+        """A mesh with every interval whose flag is set cut in two (breakpoints kept)."""
+        pieces = []
+        for (s0, s1), flag in zip(self.intervals, flags):
+            pieces += [(s0, 0.5 * (s0 + s1)), (0.5 * (s0 + s1), s1)] if flag else [(s0, s1)]
+        return ModuleMesh(self.length, self.breakpoints, tuple(pieces))
+
 
 def module_breakpoints(robot, index):
     """Sorted arc lengths [m] where the solution may jump in strain: anchors, loads, ends."""

@@ -51,45 +51,40 @@ def global_balance(robot, modules, params, tensions):
     pulls = [abs(float(t)) for t in tensions]
     force_scale = float(sum(pulls))
     moment_scale = float(sum(p * robot.modules[a.module].length for p, a in zip(pulls, robot.actuators)))
-    for point, f, m in external_loads(robot, modules, params):
-        arm = np.cross(point - base, f)
-        force, moment = force + f, moment + arm + m
-        force_scale += float(np.linalg.norm(f))
-        moment_scale += float(np.linalg.norm(arm) + np.linalg.norm(m))
+    value = _values(robot, params)
+    for m, result in enumerate(modules):
+        points, forces, moments = _module_loads(robot, m, result, modules, value)     # (3, k) each
+        hanger = _decoupled_root(robot, m)
+        if hanger is not None:           # a decoupled subtree: its net force at its attachment
+            points = modules[robot.modules[hanger].parent].p[:, -1:]
+            forces, moments = forces.sum(axis=1, keepdims=True), np.zeros((3, 1))
+        arms = np.cross(points - base[:, None], forces, axis=0)
+        force, moment = force + forces.sum(axis=1), moment + arms.sum(axis=1) + moments.sum(axis=1)
+        force_scale += float(np.linalg.norm(forces, axis=0).sum())
+        moment_scale += float(np.linalg.norm(arms, axis=0).sum() + np.linalg.norm(moments, axis=0).sum())
     return GlobalBalance(force, moment, force_scale, moment_scale)
 
 
-def external_loads(robot, modules, params):
-    """Every external load as ``(point (3,), force (3,), moment (3,))``, global frame; the loads
-    on a decoupled subtree as their net force at its attachment point."""
-    value = _values(robot, params)
-    out = []
-    for m, result in enumerate(modules):
-        loads = _module_loads(robot, m, result, modules, value)
-        hanger = _decoupled_root(robot, m)
-        if hanger is None:
-            out.extend(loads)
-        elif loads:
-            point = modules[robot.modules[hanger].parent].p[:, -1]
-            out.append((point, sum(f for _, f, _ in loads), np.zeros(3)))
-    return out
-
-
 def _module_loads(robot, m, result, modules, value):
-    module, g = robot.modules[m], value("gravity")
-    w = result.weights
-    loads = [(result.p[:, i], module.weight_density * w[i] * g, np.zeros(3)) for i in np.flatnonzero(w)]
+    """``(points, forces, moments)``, each (3, k): every external load on module m (global
+    frame), its self-weight as one load per quadrature node."""
+    module, g, w = robot.modules[m], value("gravity"), result.weights
+    loads = [(result.p, module.weight_density * np.outer(g, w), np.zeros((3, w.size)))]
     if module.connector is not None and module.connector.mass > 0:
         tip = modules[module.parent]
         point = tip.p[:, -1] + tip.R[:, :, -1] @ module.connector.center_of_mass
-        loads.append((point, module.connector.mass * g, np.zeros(3)))
+        loads.append(_columns(point, module.connector.mass * g, np.zeros(3)))
     for load in robot.point_loads:
         if load.module == m:
-            loads.append(_point_load(load, result, value))
+            loads.append(_columns(*_point_load(load, result, value)))
     for load in robot.distributed_loads:
         if load.module == m:
-            loads.extend(_distributed_load(load, result, value))
-    return loads
+            loads.append(_distributed_load(load, result, value))
+    return tuple(np.hstack(parts) for parts in zip(*loads))
+
+
+def _columns(*vectors):
+    return tuple(np.asarray(v, float).reshape(3, 1) for v in vectors)
 
 
 def _point_load(load, result, value):
@@ -106,13 +101,14 @@ def _point_load(load, result, value):
 
 
 def _distributed_load(load, result, value):
-    inside = (result.s > load.span[0]) & (result.s <= load.span[1]) & (result.weights != 0)
+    """``(points, forces, moments)`` (3, k) of a distributed load at the quadrature nodes in its span."""
+    inside = np.flatnonzero((result.s > load.span[0]) & (result.s <= load.span[1]) & (result.weights != 0))
     force, moment = value(f"{load.name}.force"), value(f"{load.name}.moment")
-    out = []
-    for i in np.flatnonzero(inside):
-        f, l = (result.R[:, :, i] @ force, result.R[:, :, i] @ moment) if load.frame == "body" else (force, moment)
-        out.append((result.p[:, i], result.weights[i] * f, result.weights[i] * l))
-    return out
+    w = result.weights[inside]
+    if load.frame == "body":
+        R = result.R[:, :, inside]
+        return result.p[:, inside], np.einsum("ijk,j->ik", R, force) * w, np.einsum("ijk,j->ik", R, moment) * w
+    return result.p[:, inside], np.outer(force, w), np.outer(moment, w)
 
 
 def load_markers(robot, modules, params):

@@ -364,6 +364,29 @@ class SolverOptions(Strict):
     max_iterations: int = Field(default=200, ge=1)
     continuation: Literal["auto", "always", "never"] = "auto"
     algorithm: Literal["ipopt", "newton"] = "newton"
+    #: accuracy asked of a cold collocation solve: tip position [m] and tensions (relative to
+    #: the largest), checked by an error estimate and met by refining the mesh (``refine: auto``)
+    tip_tolerance: Annotated[float, _quantity("length"), Field(gt=0)] = 1e-7
+    tension_tolerance: Annotated[float, Field(gt=0, lt=1)] = 1e-6
+    #: ``off`` (YAML reads a bare ``off`` as false, accepted too) keeps the mesh and only reports
+    refine: Annotated[Literal["auto", "off"], BeforeValidator(
+        lambda v: {False: "off", True: "auto"}.get(v, v) if isinstance(v, bool) else v)] = "auto"
+    max_intervals: int = Field(default=200, ge=1, le=2000)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _tolerance_mapping(cls, data):
+        """``tolerance: {residual, tip, tension}`` sets the three tolerances at once."""
+        if isinstance(data, dict) and isinstance(data.get("tolerance"), dict):
+            data = dict(data)
+            given = dict(data.pop("tolerance"))
+            unknown = set(given) - {"residual", "tip", "tension"}
+            if unknown:
+                raise ValueError(f"tolerance: unknown key(s) {sorted(unknown)}; valid: residual, tip, tension")
+            for key, field in (("residual", "tolerance"), ("tip", "tip_tolerance"), ("tension", "tension_tolerance")):
+                if key in given:
+                    data[field] = given[key]
+        return data
 
 
 # ----------------------------------------------------------------------------- inverse statics

@@ -18,23 +18,16 @@ class CollocationSolver:
     """Direct collocation + IPOPT. ``solve(params, initial=None)`` -> :class:`Solution`."""
     method = "collocation"
 
-    def __init__(self, robot, options):
+    def __init__(self, robot, options, meshes=None, degree=None):
         start = time.perf_counter()
         self.robot, self.options = robot, options
-        self.nlp = CollocationNLP(robot, options.intervals, options.degree, options.scheme)
-        # square feasibility problem (f = 0): success is governed by constr_viol_tol on our own
-        # order-one scaled constraints; equalities are not relaxed (bound_relax_factor = 0);
-        # pivtol = 0 lets MUMPS skip threshold pivoting (IPOPT raises it when a solve is inaccurate);
-        # the Lagrangian Hessian is zero at the multipliers of a square problem: no need to build it
-        ipopt = {"print_level": 0, "sb": "yes", "tol": max(options.tolerance, 1e-8),
-                 "constr_viol_tol": options.tolerance, "max_iter": options.max_iterations,
-                 "warm_start_init_point": "yes", "hessian_approximation": "limited-memory",
-                 "mumps_pivtol": 0.0, "nlp_scaling_method": "none",
-                 "bound_relax_factor": 0.0}
-        self._ipopt = ca.nlpsol("collocation", "ipopt", self.nlp.problem,
-                                {"ipopt": ipopt, "print_time": False, "error_on_fail": False,
-                                                       "expand": True})
-        self._constraints = ca.Function("g", [self.nlp.w, self.nlp.P], [self.nlp.problem["g"]]).expand()
+        self.degree = degree or options.degree
+        self.nlp = CollocationNLP(robot, options.intervals, self.degree, options.scheme, meshes)
+        self._constraints = ca.Function("nlp_g", [self.nlp.w, self.nlp.P], [self.nlp.problem["g"]]).expand()
+        w, P = ca.SX.sym("w", self.nlp.w.numel()), ca.SX.sym("P", self.nlp.P.numel())
+        g = self._constraints(w, P)                   # the Jacobian of the expanded (SX) residual
+        self._jacobian = ca.Function("nlp_jac_g", [w, P], [g, ca.jacobian(g, w)])
+        self._ipopt_instance = None      # IPOPT is built on first use (Newton needs only g and J)
         self._square = None
         self.build_time_s = time.perf_counter() - start
         self.solve_count = 0
@@ -59,6 +52,24 @@ class CollocationSolver:
                 return newton
         return self.solve_ipopt(params, initial)
 
+    @property
+    def _ipopt(self):
+        """IPOPT on the square feasibility problem (f = 0), built on first use: success is
+        governed by constr_viol_tol on our own order-one scaled constraints; equalities are not
+        relaxed (bound_relax_factor = 0); pivtol = 0 lets MUMPS skip threshold pivoting (IPOPT
+        raises it when a solve is inaccurate); the Lagrangian Hessian is zero at the multipliers
+        of a square problem: no need to build it."""
+        if self._ipopt_instance is None:
+            options = self.options
+            ipopt = {"print_level": 0, "sb": "yes", "tol": max(options.tolerance, 1e-8),
+                     "constr_viol_tol": options.tolerance, "max_iter": options.max_iterations,
+                     "warm_start_init_point": "yes", "hessian_approximation": "limited-memory",
+                     "mumps_pivtol": 0.0, "nlp_scaling_method": "none", "bound_relax_factor": 0.0}
+            self._ipopt_instance = ca.nlpsol("collocation", "ipopt", self.nlp.problem,
+                                             {"ipopt": ipopt, "print_time": False, "error_on_fail": False,
+                                              "expand": True})
+        return self._ipopt_instance
+
     def solve_ipopt(self, params, initial=None):
         """IPOPT on the square NLP at ``params``, warm-started from ``initial`` (a Solution)."""
         params = np.asarray(params, dtype=float)
@@ -79,10 +90,18 @@ class CollocationSolver:
         return self._assemble(w, params, status)
 
     @property
+    def higher(self):
+        """The same NLP at degree d + 1 on the same meshes (built on first use): the reference of
+        the error estimate (:mod:`tca_casadi.solvers.accuracy`)."""
+        if getattr(self, "_higher", None) is None:
+            self._higher = CollocationSolver(self.robot, self.options, self.nlp.meshes, self.degree + 1)
+        return self._higher
+
+    @property
     def square(self):
         """The :class:`SquareSystem` (residual, sparse Jacobian, Newton) of this NLP."""
         if self._square is None:
-            self._square = SquareSystem(self.nlp, self._ipopt)
+            self._square = SquareSystem(self.nlp, self._constraints, self._jacobian)
         return self._square
 
     def linearise(self, w, params):

@@ -45,13 +45,13 @@ class _Buffered:
 
 
 class SquareSystem:
-    """``g`` and ``J_w = dg/dw`` at ``(w, P)`` for the NLP ``nlp`` solved by ``ipopt``."""
+    """``g`` and ``J_w = dg/dw`` at ``(w, P)`` for the NLP ``nlp``, from the Functions
+    ``residual (w, P) -> g`` and ``jacobian (w, P) -> (g, J_w)``."""
 
-    def __init__(self, nlp, ipopt):
+    def __init__(self, nlp, residual, jacobian):
         self.nlp = nlp
-        jacobian = ipopt.get_function("nlp_jac_g")
         self._with_jacobian = _Buffered(jacobian)
-        self._residual = _Buffered(ipopt.get_function("nlp_g"))
+        self._residual = _Buffered(residual)
         sparsity = jacobian.sparsity_out(1)
         colind, row = sparsity.get_ccs()
         self._indptr, self._indices = np.array(colind), np.array(row)

@@ -33,6 +33,7 @@ class CheckReport:
     solve_times_s: dict = field(default_factory=dict)
     position_tolerance: float = POSITION_TOLERANCE
     tension_tolerance: float = TENSION_TOLERANCE
+    accuracy: dict = field(default_factory=dict)     # method -> its error estimate (if any)
 
     @property
     def worst_relative_tension(self):
@@ -71,6 +72,10 @@ class CheckReport:
                          f"(relative {d['relative']:.2e})")
         for key, d in self.slack_differences.items():
             lines.append(f"  {key:<24} slack length difference {d:.3e} m")
+        for method, estimate in self.accuracy.items():
+            lines.append(f"  {method} error estimate: tip {estimate['tip_error_estimate']:.1e} m, tensions "
+                         f"{estimate['tension_error_estimate']:.1e} ({'met' if estimate['met'] else 'NOT met'}; "
+                         f"{'+'.join(map(str, estimate['intervals']))} intervals)")
         lines.append("  solve time: " + ", ".join(f"{k} {v:.3f} s" for k, v in self.solve_times_s.items()))
         return "\n".join(lines)
 
@@ -99,7 +104,8 @@ def compare_solutions(first, second, position_tolerance=POSITION_TOLERANCE,
         tip_rotation_difference=rotation_angle(first.tip_rotation, second.tip_rotation),
         max_centerline_distance=distance, tension_differences=tensions, slack_differences=slack,
         solve_times_s={a: first.solve_time_s, b: second.solve_time_s},
-        position_tolerance=position_tolerance, tension_tolerance=tension_tolerance)
+        position_tolerance=position_tolerance, tension_tolerance=tension_tolerance,
+        accuracy={s.method: s.accuracy.as_dict() for s in (first, second) if s.accuracy is not None})
 
 
 def _centerline_distance(ma, mb):

@@ -1,0 +1,184 @@
+"""Accuracy under control: an error estimate for a collocation solution, and refinement of the
+intervals that carry the error until the tip and the tensions meet their tolerances.
+
+**Estimate.** The same robot on the same mesh at degree ``d + 1`` is solved by Newton from the
+degree-``d`` solution interpolated onto its nodes (two or three iterations). The higher degree
+is far more accurate (the tip converges at order ``2d``), so the differences estimate the
+degree-``d`` errors:
+
+    tip error      = |p_tip(d+1) - p_tip(d)|                               [m]
+    tension error  = max_k |F_k(d+1) - F_k(d)| / max(max_k |F_k|, 1 mN)    [-]
+
+The solution's global balance residual (:mod:`tca_casadi.model.balance`) must also be at most
+``BALANCE_TOLERANCE`` (1e-6 of the forces in play).
+
+**Where.** The error that interval ``i`` adds is the change, across it, of the difference of the
+two solutions' scaled states ``e = (x(d+1) - x(d)) / scale`` (positions per module length,
+strains as order-one wrenches): ``eta_i = |e(s_i end) - e(s_i start)|``. Intervals with
+``eta_i >= FLAG_FRACTION * max eta`` are bisected; the solution is carried onto the new mesh by
+interpolation and corrected by Newton; repeat until both estimates meet their tolerances, or the
+mesh reaches ``solver.max_intervals`` per module (a warning), or ``MAX_ROUNDS``.
+"""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .assemble import BALANCE_TOLERANCE
+
+#: intervals whose indicator is at least this fraction of the largest are bisected
+FLAG_FRACTION = 0.3
+#: refinement rounds at most
+MAX_ROUNDS = 8
+#: tension differences are relative to the largest tension, but at least this [N]
+TENSION_FLOOR = 1e-3
+
+
+@dataclass
+class AccuracyEstimate:
+    """Estimated errors of a solution, the mesh it was found on, and how it was reached."""
+    tip_error: float                 # [m]
+    tension_error: float             # relative to the largest tension
+    tip_tolerance: float
+    tension_tolerance: float
+    intervals: list = field(default_factory=list)     # per module
+    refinements: int = 0
+    limit_reached: bool = False
+    balance: float = 0.0             # global balance residual, relative (model.balance)
+    balance_tolerance: float = BALANCE_TOLERANCE
+
+    @property
+    def met(self):
+        return (self.tip_error <= self.tip_tolerance and self.tension_error <= self.tension_tolerance
+                and self.balance <= self.balance_tolerance)
+
+    def as_dict(self):
+        return {"tip_error_estimate": self.tip_error, "tension_error_estimate": self.tension_error,
+                "tip_tolerance": self.tip_tolerance, "tension_tolerance": self.tension_tolerance,
+                "global_balance": self.balance, "balance_tolerance": self.balance_tolerance,
+                "met": self.met, "intervals": list(self.intervals), "refinements": self.refinements,
+                "mesh_limit_reached": self.limit_reached}
+
+    def summary(self):
+        state = "met" if self.met else "NOT met"
+        return (f"accuracy {state}: tip error ~{self.tip_error:.1e} m (tolerance {self.tip_tolerance:.0e}), "
+                f"tensions ~{self.tension_error:.1e} (tolerance {self.tension_tolerance:.0e}), "
+                f"global balance {self.balance:.1e} (tolerance {self.balance_tolerance:.0e}); "
+                f"{'+'.join(map(str, self.intervals))} intervals after {self.refinements} refinement(s)")
+
+
+def interpolate(source, w, target, params):
+    """Scaled variables of NLP ``target`` from the solution ``w`` of NLP ``source`` (same robot;
+    each target interval inside one source interval): the states' polynomials evaluated at the
+    target's nodes, the tensions copied, the partial lengths recomputed."""
+    out = np.zeros(target.scale.size)
+    physical = np.asarray(w, float) * source.scale
+    for m in range(len(source.meshes)):
+        src_nodes = physical[source.state_index[m]]                  # (n_src, 13, d_src + 1)
+        src_intervals = np.array(source.meshes[m].intervals)
+        tgt_s = target.node_s(m)                                     # (n_tgt, d_tgt + 1)
+        middles = tgt_s.mean(axis=1)
+        owner = np.searchsorted(src_intervals[:, 1], middles)        # source interval of each target one
+        owner = np.minimum(owner, len(src_intervals) - 1)
+        s0, s1 = src_intervals[owner, 0], src_intervals[owner, 1]
+        local = (tgt_s - s0[:, None]) / (s1 - s0)[:, None]           # (n_tgt, d_tgt + 1)
+        basis = _lagrange(source.scheme.tau, local)                  # (n_tgt, d_tgt + 1, d_src + 1)
+        values = np.einsum("tjr,tkr->tkj", basis, src_nodes[owner])  # (n_tgt, 13, d_tgt + 1)
+        out[target.state_index[m]] = values
+    out[target.tension_index] = physical[source.tension_index]
+    out = out / target.scale
+    partial = np.concatenate(target.partial_index) if target.partial_index else np.zeros(0, int)
+    out[partial] = np.array(target.partials(out, params)).ravel()
+    return out
+
+
+def _lagrange(nodes, points):
+    """Lagrange basis on ``nodes`` (k,) evaluated at ``points`` (..., ): shape (..., k)."""
+    points = np.asarray(points)[..., None]
+    out = np.ones(points.shape[:-1] + (nodes.size,))
+    for j, node in enumerate(nodes):
+        others = np.delete(nodes, j)
+        out[..., j] = np.prod((points - others) / (node - others), axis=-1)
+    return out
+
+
+def estimate(solver, solution, params, higher):
+    """``(tip error, tension error, indicators per module)`` of ``solution`` (by ``solver``,
+    a CollocationSolver) against ``higher`` (the same meshes at degree d + 1); None if the
+    higher-degree Newton solve fails."""
+    w0 = interpolate(solver.nlp, solution.raw["w"], higher.nlp, params)
+    better = higher.solve_newton(params, w0)
+    if not better.converged:
+        return None
+    tip = float(np.linalg.norm(better.tip_position - solution.tip_position))
+    tensions = np.array([a.tension for a in solution.actuators.values()])
+    better_tensions = np.array([a.tension for a in better.actuators.values()])
+    floor = max(float(np.max(np.abs(tensions), initial=0.0)), TENSION_FLOOR)
+    tension = float(np.max(np.abs(better_tensions - tensions), initial=0.0)) / floor
+    return tip, tension, _indicators(solver.nlp, solution.raw["w"], higher.nlp, better.raw["w"])
+
+
+def _indicators(nlp, w, higher, w_higher):
+    """Per module, the error each interval adds: the change across it of the scaled difference
+    between the two solutions, compared at the interval ends."""
+    out = []
+    for m in range(len(nlp.meshes)):
+        low = _interval_ends(nlp, w, m)
+        high = _interval_ends(higher, w_higher, m)
+        difference = (high - low) / nlp.node_scale[m][None, None, :]      # (n_int, 2, 13)
+        out.append(np.linalg.norm(difference[:, 1] - difference[:, 0], axis=1))
+    return out
+
+
+def _interval_ends(nlp, w, m):
+    """(n_int, 2, 13) physical deviation states at the start and end of every interval."""
+    nodes = (np.asarray(w, float) * nlp.scale)[nlp.state_index[m]]      # (n_int, 13, d+1)
+    end = np.einsum("kr,r->k", nodes.reshape(-1, nodes.shape[-1]), nlp.scheme.D).reshape(nodes.shape[:2])
+    return np.stack([nodes[:, :, 0], end], axis=1)
+
+
+def flags_from(indicators):
+    """Which intervals to bisect: those carrying at least ``FLAG_FRACTION`` of the largest."""
+    largest = max((float(np.max(i)) for i in indicators if i.size), default=0.0)
+    if largest == 0.0:
+        return [np.zeros(i.size, bool) for i in indicators]
+    return [i >= FLAG_FRACTION * largest for i in indicators]
+
+
+def control(solver, solution, params, refine=True):
+    """Estimate the accuracy of ``solution`` (by the CollocationSolver ``solver``) and, with
+    ``refine`` (and ``solver.refine: auto``), bisect the intervals that carry the error until
+    the estimate meets the tolerances. Returns ``(solver, solution, estimate)``: the solver of
+    the final mesh (a new one when refined), its solution (with ``accuracy`` set and a warning
+    when a tolerance is not met), the :class:`AccuracyEstimate` (None if unavailable)."""
+    from .collocation import CollocationSolver
+    options, refinements = solver.options, 0
+    while True:
+        result = estimate(solver, solution, params, solver.higher)
+        if result is None:
+            solution.warnings.append("no error estimate: the degree d+1 solve on the same mesh did not converge")
+            return solver, solution, None
+        tip, tension, indicators = result
+        found = AccuracyEstimate(tip, tension, options.tip_tolerance, options.tension_tolerance,
+                                 [len(mesh.intervals) for mesh in solver.nlp.meshes], refinements,
+                                 balance=solution.balance.relative)
+        meshes = [mesh.bisected(f) for mesh, f in zip(solver.nlp.meshes, flags_from(indicators))]
+        found.limit_reached = not found.met and any(len(m.intervals) > options.max_intervals for m in meshes)
+        if found.met or not refine or options.refine == "off" or refinements >= MAX_ROUNDS or found.limit_reached:
+            return solver, _attach(solution, found, refine and options.refine == "auto"), found
+        finer = CollocationSolver(solver.robot, options, meshes=meshes)
+        trial = finer.solve_newton(params, interpolate(solver.nlp, solution.raw["w"], finer.nlp, params))
+        if not trial.converged:
+            return solver, _attach(solution, found, True), found
+        trial.message = f"{solution.message}; mesh refined where the error was ({refinements + 1}x)"
+        trial.iterations += solution.iterations
+        trial.solve_time_s += solution.solve_time_s
+        solver, solution, refinements = finer, trial, refinements + 1
+
+
+def _attach(solution, found, refined):
+    solution.accuracy = found
+    if not found.met:
+        why = ("the mesh limit was reached: raise solver.max_intervals" if found.limit_reached else
+               "refinement is off (solver.refine)" if not refined else f"after {found.refinements} refinements")
+        solution.warnings.append(f"{found.summary()}: {why}")
+    return solution

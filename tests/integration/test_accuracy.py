@@ -1,0 +1,67 @@
+"""Accuracy under control: the error estimate against the error measured on a much finer mesh,
+and refinement until the tolerances are met (or a warning says why not)."""
+import json
+
+import numpy as np
+import pytest
+from random_robots import random_robot
+
+from tca_casadi import Simulation
+
+
+def _reference(scenario):
+    fine = dict(scenario, solver={"intervals": 64, "degree": 5, "refine": "off"})
+    return Simulation.from_file(fine).solve()
+
+
+@pytest.mark.parametrize("seed", [22])
+def test_refinement_meets_the_tolerance_and_the_estimate_is_honest(seed):
+    """Random 3-module robots whose starting mesh is too coarse (tip 1e-6 to 1e-5 m off)."""
+    scenario = random_robot(seed)
+    solution = Simulation.from_file(scenario).solve()
+    reference = _reference(scenario)
+    estimate = solution.accuracy
+    assert solution.converged and estimate.met and estimate.refinements >= 1
+    error = float(np.linalg.norm(solution.tip_position - reference.tip_position))
+    assert error <= estimate.tip_tolerance
+    assert 0.5 <= estimate.tip_error / error <= 2.0, (estimate.tip_error, error)
+    assert not [w for w in solution.warnings if "accuracy" in w or "global balance" in w]
+
+
+def test_without_refinement_the_estimate_says_how_far_off():
+    scenario = random_robot(22)
+    scenario["solver"] = {"refine": "off"}
+    solution = Simulation.from_file(scenario).solve()
+    error = float(np.linalg.norm(solution.tip_position - _reference(scenario).tip_position))
+    assert error > 1e-6                                          # the starting mesh really is coarse
+    assert 0.5 <= solution.accuracy.tip_error / error <= 2.0
+    assert not solution.accuracy.met
+    assert any("NOT met" in w and "refinement is off" in w for w in solution.warnings)
+
+
+def test_reaching_the_mesh_limit_is_a_warning():
+    scenario = random_robot(22)
+    scenario["solver"] = {"max_intervals": 8}
+    solution = Simulation.from_file(scenario).solve()
+    assert solution.converged and not solution.accuracy.met and solution.accuracy.limit_reached
+    assert any("mesh limit" in w and "solver.max_intervals" in w for w in solution.warnings)
+
+
+def test_shipped_scenarios_meet_it_on_the_starting_mesh_and_report_it(scenarios, tmp_path):
+    sim = Simulation.from_file(scenarios / "bending_module.yaml")
+    solution = sim.solve()
+    assert solution.accuracy.met and solution.accuracy.refinements == 0
+    assert solution.accuracy.intervals == [6]
+    solution.save(tmp_path)
+    saved = json.loads((tmp_path / "solution.json").read_text())["accuracy"]
+    assert saved["met"] and saved["tip_error_estimate"] < 1e-10 and saved["intervals"] == [6]
+
+
+def test_the_refined_solver_serves_later_warm_solves():
+    sim = Simulation.from_file(random_robot(4))
+    first = sim.solve()
+    assert first.accuracy.refinements >= 1
+    solver = sim.solver()
+    assert [len(m.intervals) for m in solver.nlp.meshes] == first.accuracy.intervals
+    warm = sim.solve(warm_start=first)
+    assert warm.converged and warm.raw["w"].size == first.raw["w"].size
