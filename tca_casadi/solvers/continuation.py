@@ -8,8 +8,10 @@ critical load), or where the sign of ``det J_w`` differs (the Jacobian is singul
 between: a fold or a bifurcation), counts as a failed step and is halved. The trapezoid test is
 skipped on a step where a tension-only actuator goes slack or taut: the branch has a corner
 there.
-Used by cold starts (from the unloaded reference state) and by sweeps.
+Used by cold starts (from the unloaded reference state) and by sweeps. :class:`ArclengthFollower`
+is the pseudo-arclength variant that follows a branch through folds (``sweep --arclength``).
 """
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -114,3 +116,123 @@ class BranchFollower:
 
 def _slack_pattern(solution):
     return tuple(a.slack for a in solution.actuators.values() if a.tension_only)
+
+
+class ArclengthFollower:
+    """Pseudo-arclength continuation of ``solver`` (a CollocationSolver) along
+    ``P(lam) = P0 + lam delta``: ``(w, lam)`` advance together along the unit tangent of the
+    bordered system ``[[J_w, J_P delta], [t^T]]``; Newton corrects on
+    ``[g(w, P(lam)) = 0, t . (x - x_k) = ds]`` with sparse LU, so the branch is followed through
+    folds (turning points in lam), also below the start value (down to half the range below it),
+    until it reaches lam = 1."""
+
+    def __init__(self, solver, P0, delta, tolerance):
+        self.solver, self.tolerance = solver, tolerance
+        self.branch = BranchFollower(solver, P0, delta)
+        self.delta = self.branch.delta
+
+    def params_at(self, lam):
+        return self.branch.params_at(lam)
+
+    def run(self, first, steps, min_step, max_points, record, where):
+        """Follow the branch from ``first`` (a point with ``w``, ``w_rate``, ``solution``) with
+        steps of about ``1 / (steps - 1)`` of the range (halved down to ``min_step`` of it) for
+        at most ``max_points`` points. ``record(BranchPoint)`` keeps a point and returns what it
+        kept (with ``values``); ``where(kept)`` describes a point for messages. Returns
+        ``(completed, message)``."""
+        tangent = _normalise(np.r_[first.w_rate, 1.0])
+        ds = np.linalg.norm(np.r_[first.w_rate, 1.0]) / (steps - 1)
+        ds_max, ds_min = 4 * ds, min_step * ds
+        current = record(self.branch.point(0.0, first.solution, first.w, tangent))
+        count = 1
+        while count < max_points:
+            corrected = self.correct(current, tangent, ds)
+            if corrected is None:
+                ds /= 2
+                if ds < ds_min:
+                    return False, (f"stopped at {where(current)}: the arclength corrector failed down "
+                                   f"to a step of {ds_min:.2g}")
+                continue
+            w, lam, linear, iterations, elapsed = corrected
+            tangent = self.tangent(linear, tangent)
+            if lam > 1.0 and tangent[-1] > 0:
+                return self._land(current, record, count)
+            solution = self.solver.evaluate(w, self.params_at(lam), _newton_status(
+                self.solver.max_residual(w, self.params_at(lam)), self.tolerance, iterations, elapsed))
+            current, count = record(self.branch.point(lam, solution, w, tangent)), count + 1
+            if lam < -0.5:
+                return False, ("the branch turned back and left the swept range (below the start "
+                               f"by half the range) after a fold; stopped at {where(current)}")
+            ds = min(1.5 * ds, ds_max) if iterations <= 3 else ds
+        return False, f"stopped after {max_points} points (max_points) before reaching the stop value"
+
+    def _land(self, current, record, count):
+        """Land exactly on lam = 1 from the last point before it."""
+        final = self.solver.solve(self.params_at(1.0), current.solution)
+        if not final.converged:
+            return False, f"the last step to the stop value failed: {final.message}"
+        tangent = np.r_[current.w_rate, current.lam_rate]
+        tangent = self.tangent(self.solver.linearise(final.raw["w"], self.params_at(1.0)), tangent)
+        record(self.branch.point(1.0, final, tangent=tangent))
+        return True, f"reached the stop value in {count + 1} points (pseudo-arclength)"
+
+    def correct(self, current, tangent, ds, max_iterations=12):
+        """Newton on ``[g(w, P(lam)); t . ((w, lam) - (w_k, lam_k)) - ds]`` from the predictor.
+        Returns ``(w, lam, linearisation, iterations, seconds)`` or None."""
+        started = time.perf_counter()
+        x = np.r_[current.w, current.lam] + ds * tangent
+        anchor = np.r_[current.w, current.lam]
+        square = self.solver.square
+        for iteration in range(max_iterations + 1):
+            g, J_w = square.evaluate(x[:-1], self.params_at(x[-1]))
+            arc = tangent @ (x - anchor) - ds
+            if np.max(np.abs(g)) <= self.tolerance and abs(arc) <= self.tolerance:
+                if np.max(np.abs(x - anchor - ds * tangent)) > 0.5 * ds:      # left the branch
+                    return None
+                linear = self.solver.linearise(x[:-1], self.params_at(x[-1]))
+                return x[:-1], x[-1], linear, iteration, time.perf_counter() - started
+            if iteration == max_iterations:
+                return None
+            step = solve_bordered(J_w, self._lam_column(x), tangent, np.r_[g, arc])
+            if step is None or not np.all(np.isfinite(step)) or np.max(np.abs(step)) > 10:
+                return None
+            x = x - step
+        return None
+
+    def _lam_column(self, x):
+        """``dg/dlam = J_P delta`` at ``x = (w, lam)``."""
+        return self.solver.square.parameter_jacobian(x[:-1], self.params_at(x[-1])) @ self.delta
+
+    def tangent(self, linear, previous):
+        """Unit tangent of the branch at a point, oriented along ``previous``."""
+        rhs = np.zeros(previous.size)
+        rhs[-1] = 1.0
+        tangent = solve_bordered(linear.J_w, linear.J_P @ self.delta, previous, rhs)
+        if tangent is None:
+            return previous
+        return _normalise(tangent)
+
+
+def solve_bordered(J_w, column, border, rhs):
+    """Solve ``[[J_w, column], [border^T]] x = rhs`` (sparse LU); None if singular."""
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+    column = sp.csc_matrix(np.asarray(column, float).reshape(-1, 1))
+    matrix = sp.bmat([[J_w, column], [sp.csr_matrix(border[:-1].reshape(1, -1)),
+                                      sp.csr_matrix(border[-1:].reshape(1, 1))]], format="csc")
+    try:
+        return spla.splu(matrix).solve(np.asarray(rhs, float))
+    except RuntimeError:
+        return None
+
+
+def _normalise(vector):
+    return vector / np.linalg.norm(vector)
+
+
+def _newton_status(residual, tolerance, iterations, elapsed):
+    converged = residual <= 10 * tolerance
+    return {"converged": converged, "status": "Newton (pseudo-arclength corrector)",
+            "message": f"pseudo-arclength Newton corrector: {iterations} iterations, max scaled "
+                       f"residual {residual:.1e}", "max_residual": residual,
+            "iterations": iterations, "solve_time_s": elapsed}

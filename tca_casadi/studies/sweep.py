@@ -21,11 +21,9 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ..errors import ScenarioError
-from ..solvers.continuation import BranchFollower
+from ..solvers.continuation import ArclengthFollower, BranchFollower
 from .parameters import check_range, resolve_parameters
 from .sweep_result import SweepResult, find_events
 
@@ -164,105 +162,16 @@ class Sweep:
 
     # ------------------------------------------------------------------ pseudo-arclength
     def _arclength(self, points, progress):
-        current = points[-1]
-        tangent = _normalise(np.r_[current.w_rate, 1.0])
-        ds = np.linalg.norm(np.r_[current.w_rate, 1.0]) / (self.steps - 1)
-        ds_max, ds_min = 4 * ds, self.min_step * ds
-        current = self._record(self.follower.point(0.0, current.solution, current.w, tangent))
-        points[-1] = current
-        while len(points) < self.max_points:
-            corrected = self._correct(current, tangent, ds)
-            if corrected is None:
-                ds /= 2
-                if ds < ds_min:
-                    return False, (f"stopped at {_describe(self.parameters, current.values)}: "
-                                   f"the arclength corrector failed down to a step of {ds_min:.2g}")
-                continue
-            w, lam, linear, iterations, elapsed = corrected
-            tangent = self._tangent(linear, tangent)
-            if lam > 1.0 and tangent[-1] > 0:
-                return self._finish(points, current, progress)
-            solution = self.solver.evaluate(w, self.params_at(lam), _newton_status(
-                self.solver.max_residual(w, self.params_at(lam)), self.tolerance, iterations, elapsed))
-            current = self._record(self.follower.point(lam, solution, w, tangent))
-            points.append(current)
-            _report(progress, current, self)
-            if lam < -0.5:
-                return False, ("the branch turned back and left the swept range (below the start "
-                               f"by half the range) after a fold; stopped at "
-                               f"{_describe(self.parameters, current.values)}")
-            ds = min(1.5 * ds, ds_max) if iterations <= 3 else ds
-        return False, f"stopped after {self.max_points} points (max_points) before reaching the stop value"
+        follower = ArclengthFollower(self.solver, self.P_start, self.delta, self.tolerance)
 
-    def _finish(self, points, current, progress):
-        """Land exactly on lam = 1 from the last point before it."""
-        final = self.solver.solve(self.params_at(1.0), current.solution)
-        if not final.converged:
-            return False, f"the last step to the stop value failed: {final.message}"
-        tangent = np.r_[current.w_rate, current.lam_rate]
-        tangent = self._tangent(self.solver.linearise(final.raw["w"], self.params_at(1.0)), tangent)
-        points.append(self._record(self.follower.point(1.0, final, tangent=tangent)))
-        _report(progress, points[-1], self)
-        return True, f"reached the stop value in {len(points)} points (pseudo-arclength)"
+        def record(branch_point):
+            points.append(self._record(branch_point))
+            _report(progress, points[-1], self)
+            return points[-1]
 
-    def _correct(self, current, tangent, ds, max_iterations=12):
-        """Newton on ``[g(w, P(lam)); t . ((w, lam) - (w_k, lam_k)) - ds]`` from the predictor.
-        Returns ``(w, lam, linearisation, iterations, seconds)`` or None."""
-        started = time.perf_counter()
-        x = np.r_[current.w, current.lam] + ds * tangent
-        anchor = np.r_[current.w, current.lam]
-        square = self.solver.square
-        for iteration in range(max_iterations + 1):
-            g, J_w = square.evaluate(x[:-1], self.params_at(x[-1]))
-            arc = tangent @ (x - anchor) - ds
-            if np.max(np.abs(g)) <= self.tolerance and abs(arc) <= self.tolerance:
-                if np.max(np.abs(x - anchor - ds * tangent)) > 0.5 * ds:      # left the branch
-                    return None
-                linear = self.solver.linearise(x[:-1], self.params_at(x[-1]))
-                return x[:-1], x[-1], linear, iteration, time.perf_counter() - started
-            if iteration == max_iterations:
-                return None
-            step = _solve_bordered(J_w, self._lam_column(x), tangent, np.r_[g, arc])
-            if step is None or not np.all(np.isfinite(step)) or np.max(np.abs(step)) > 10:
-                return None
-            x = x - step
-        return None
-
-    def _lam_column(self, x):
-        """``dg/dlam = J_P delta`` at ``x = (w, lam)``."""
-        return self.solver.square.parameter_jacobian(x[:-1], self.params_at(x[-1])) @ self.delta
-
-    def _tangent(self, linear, previous):
-        """Unit tangent of the branch at a point, oriented along ``previous``."""
-        rhs = np.zeros(previous.size)
-        rhs[-1] = 1.0
-        tangent = _solve_bordered(linear.J_w, linear.J_P @ self.delta, previous, rhs)
-        if tangent is None:
-            return previous
-        return _normalise(tangent)
-
-
-def _solve_bordered(J_w, column, border, rhs):
-    """Solve ``[[J_w, column], [border^T]] x = rhs`` (sparse LU); None if singular."""
-    column = sp.csc_matrix(np.asarray(column, float).reshape(-1, 1))
-    matrix = sp.bmat([[J_w, column], [sp.csr_matrix(border[:-1].reshape(1, -1)),
-                                      sp.csr_matrix(border[-1:].reshape(1, 1))]], format="csc")
-    try:
-        return spla.splu(matrix).solve(np.asarray(rhs, float))
-    except RuntimeError:
-        return None
-
-
-def _normalise(vector):
-    return vector / np.linalg.norm(vector)
-
-
-def _newton_status(residual, tolerance, iterations, elapsed):
-    converged = residual <= 10 * tolerance
-    return {"converged": converged, "status": "Newton (pseudo-arclength corrector)",
-            "message": f"pseudo-arclength Newton corrector: {iterations} iterations, max scaled "
-                       f"residual {residual:.1e}", "max_residual": residual,
-            "iterations": iterations, "solve_time_s": elapsed}
+        first = points.pop()
+        return follower.run(first, self.steps, self.min_step, self.max_points, record,
+                            lambda point: _describe(self.parameters, point.values))
 
 
 def _describe(parameters, values):
