@@ -18,8 +18,6 @@ other parameters (loads, gravity, ...) are NLP parameters.
 """
 import logging
 import time
-from dataclasses import dataclass, field
-from typing import Optional
 
 import casadi as ca
 import numpy as np
@@ -29,123 +27,11 @@ from ..errors import ScenarioError
 from ..model.rotations import ROTATION, rotation_angle, rotation_numpy
 from ..scenario.checks import closest
 from ..solvers.continuation import BranchFollower
+from .inverse_result import InverseResult, write_path_results  # noqa: F401  (re-exported)
 from .parameters import resolve_parameters
+from .targets import Target, TargetLayout, read_targets  # noqa: F401  (re-exported)
 
 log = logging.getLogger(__name__)
-
-
-@dataclass
-class Target:
-    """A target pose [m]: ``position``; optionally ``direction`` (the point's tangent, unit) or
-    ``orientation`` (quaternion [w, x, y, z] of the point's frame); ``point``: 'tip' or a module."""
-    position: np.ndarray
-    direction: Optional[np.ndarray] = None
-    orientation: Optional[np.ndarray] = None
-    point: str = "tip"
-
-    @classmethod
-    def create(cls, position, direction=None, orientation=None, point="tip"):
-        """Validated target; :class:`ScenarioError` names what is wrong."""
-        position = _finite_vector(position, 3, "target position")
-        if direction is not None and orientation is not None:
-            raise ScenarioError("give a target direction or a target orientation, not both")
-        if direction is not None:
-            direction = _unit(_finite_vector(direction, 3, "target direction"), "target direction")
-        if orientation is not None:
-            orientation = _unit(_finite_vector(orientation, 4, "target orientation"), "target orientation")
-        return cls(position, direction, orientation, point)
-
-
-def _finite_vector(value, size, what):
-    try:
-        array = np.asarray(value, dtype=float).ravel()
-    except (TypeError, ValueError):
-        raise ScenarioError(f"{what}: expected {size} numbers, got {value!r}") from None
-    if array.size != size:
-        raise ScenarioError(f"{what}: expected {size} numbers, got {array.size}")
-    if not np.all(np.isfinite(array)):
-        raise ScenarioError(f"{what}: {array.tolist()} is not finite (NaN or inf)")
-    return array
-
-
-def _unit(vector, what):
-    norm = np.linalg.norm(vector)
-    if norm == 0:
-        raise ScenarioError(f"{what} must not be zero")
-    return vector / norm
-
-
-@dataclass
-class InverseResult:
-    """The answer to one query (SI, temperatures degC)."""
-    target: Target
-    temperatures: dict                 # {path: value}
-    position: np.ndarray               # achieved position of the target point [m]
-    rotation: np.ndarray               # achieved frame (3, 3)
-    position_error: float              # [m]
-    angle_error: Optional[float]       # [rad] (direction or orientation), None if not asked
-    reachable: bool
-    converged: bool
-    objective: float
-    forward: object                    # Solution at the temperatures (independent forward solve)
-    verification_difference: float     # |forward point - reported point| [m]
-    solve_time_s: float
-    iterations: int
-    starts: int
-    message: str
-    w: np.ndarray = field(repr=False, default=None)
-    tau: np.ndarray = field(repr=False, default=None)
-
-    @property
-    def verified(self):
-        return self.verification_difference <= 1e-6
-
-    def to_dict(self):
-        angle = None if self.angle_error is None else float(np.degrees(self.angle_error))
-        return {"reachable": bool(self.reachable), "converged": bool(self.converged),
-                "message": self.message,
-                "target": {"position": self.target.position.tolist(), "point": self.target.point,
-                           "direction": None if self.target.direction is None else self.target.direction.tolist(),
-                           "orientation": None if self.target.orientation is None else self.target.orientation.tolist()},
-                "temperatures": {k: float(v) for k, v in self.temperatures.items()},
-                "achieved": {"position": self.position.tolist(), "rotation_matrix": self.rotation.tolist()},
-                "position_error": float(self.position_error), "angle_error_deg": angle,
-                "verification_difference": float(self.verification_difference),
-                "verified": bool(self.verified), "objective": float(self.objective),
-                "solve_time_s": float(self.solve_time_s), "iterations": int(self.iterations),
-                "starts": int(self.starts)}
-
-    def save(self, directory, plot=True):
-        """Write ``inverse.json``, the forward ``solution.json`` + ``arrays.npz`` and, with
-        ``plot``, ``inverse.png`` (the robot, the target and the reached point)."""
-        from pathlib import Path
-
-        from ..output import write_json
-        directory = Path(directory)
-        directory.mkdir(parents=True, exist_ok=True)
-        path = write_json(directory / "inverse.json", self.to_dict())
-        written = [path, *self.forward.save(directory)]
-        if plot:
-            from ..plotting import save_robot_png
-            state = "reached" if self.reachable else f"UNREACHABLE, {self.position_error * 1e3:.3g} mm away"
-            written.append(save_robot_png(
-                self.forward, directory / "inverse.png", title=f"inverse statics: target {state}",
-                extra_points=[(self.target.position, "target", "magenta"),
-                              (self.position, "reached", "blue")]))
-        return written
-
-    def summary(self):
-        state = "REACHED" if self.reachable else "UNREACHABLE"
-        lines = [f"inverse: {state} ({self.message})",
-                 "  target [mm]:   " + " ".join(f"{v * 1e3:+.4f}" for v in self.target.position),
-                 "  achieved [mm]: " + " ".join(f"{v * 1e3:+.4f}" for v in self.position),
-                 f"  position error {self.position_error * 1e3:.4g} mm"
-                 + ("" if self.angle_error is None else f", angle error {np.degrees(self.angle_error):.4g} deg"),
-                 f"  forward check: {self.verification_difference:.2e} m "
-                 f"({'verified' if self.verified else 'NOT VERIFIED'})",
-                 f"  {self.solve_time_s * 1e3:.0f} ms, {self.iterations} IPOPT iterations, {self.starts} start(s)"]
-        lines += [f"  {path:<28}{value:9.3f} degC" for path, value in self.temperatures.items()]
-        return "\n".join(lines)
 
 
 class InverseStatics:
@@ -237,11 +123,11 @@ class InverseStatics:
         k, n_modules = len(self.parameters), len(robot.modules)
         tau = ca.MX.sym("tau", k)
         fixed = ca.MX.sym("P", robot.layout.size)
-        target = ca.MX.sym("target", 3 + 3 + 9 + 3 + n_modules)
-        position, direction = target[0:3], target[3:6]
-        R_target = ca.reshape(target[6:15], 3, 3)
-        w_position, w_direction, w_rotation = target[15], target[16], target[17]
-        select = target[18:18 + n_modules]
+        self.target_layout = TargetLayout(n_modules)
+        target = ca.MX.sym("target", self.target_layout.size)
+        parts = self.target_layout.unpack(target)
+        position, direction, R_target, select = parts["position"], parts["direction"], parts["rotation"], parts["select"]
+        w_position, w_direction, w_rotation = (parts["weights"][k] for k in range(3))
         P = fixed
         for j, parameter in enumerate(self.parameters):
             vector = ca.DM(parameter.vector(robot.layout.size))
@@ -290,7 +176,7 @@ class InverseStatics:
         R_target = rotation_numpy(target.orientation) if target.orientation is not None else np.eye(3)
         weights = [1.0, self.orientation_weight * (target.direction is not None),
                    self.orientation_weight * (target.orientation is not None)]
-        return np.r_[target.position, direction, R_target.ravel(order="F"), weights, select]
+        return self.target_layout.pack(target.position, direction, R_target, weights, select)
 
     # ------------------------------------------------------------------ queries
     def values(self, tau):
@@ -453,55 +339,3 @@ def _better(attempt, best):
     return (attempt["converged"], -attempt["objective"]) > (best["converged"], -best["objective"])
 
 
-def read_targets(path, point="tip"):
-    """Targets from a CSV with columns x, y, z [m] and optionally dx, dy, dz (a direction) or
-    qw, qx, qy, qz (an orientation); header names may carry units (``x [m]``)."""
-    import csv
-    from pathlib import Path
-    try:
-        handle = Path(path).open(newline="")
-    except OSError as exc:
-        raise ScenarioError(f"cannot read the target path {path}: {exc.strerror}") from None
-    with handle:
-        reader = csv.DictReader(handle)
-        columns = {name.split("[")[0].strip().lower(): name for name in (reader.fieldnames or [])}
-        if not {"x", "y", "z"} <= set(columns):
-            raise ScenarioError(f"{path}: the target path needs columns x, y, z [m]; found {reader.fieldnames}")
-        targets = []
-        for line, row in enumerate(reader, start=2):
-            try:
-                targets.append(Target.create(_take(row, columns, "xyz"), _take(row, columns, ("dx", "dy", "dz")),
-                                             _take(row, columns, ("qw", "qx", "qy", "qz")), point))
-            except ScenarioError as exc:
-                raise ScenarioError(f"{path}:{line}: {exc}") from None
-    if not targets:
-        raise ScenarioError(f"{path}: no targets")
-    return targets
-
-
-def _take(row, columns, keys):
-    """The numbers of ``keys`` in a CSV row, or None when any is absent or empty."""
-    if not all(k in columns and row[columns[k]].strip() for k in keys):
-        return None
-    try:
-        return [float(row[columns[k]]) for k in keys]
-    except ValueError:
-        raise ScenarioError(f"not a number in {[row[columns[k]] for k in keys]}") from None
-
-
-def write_path_results(path, results):
-    """One row per target: target, temperatures, achieved position, errors, status, time."""
-    from ..output import write_csv
-    temperature_names = list(results[0].temperatures)
-    header = (["row", "target_x [m]", "target_y [m]", "target_z [m]"]
-              + [f"{name} [degC]" for name in temperature_names]
-              + ["x [m]", "y [m]", "z [m]", "position_error [m]", "angle_error [deg]",
-                 "reachable", "verified", "solve_time [s]", "iterations"])
-    rows = []
-    for index, r in enumerate(results):
-        angle = "" if r.angle_error is None else f"{np.degrees(r.angle_error):.8g}"
-        rows.append([index, *(f"{v:.10g}" for v in r.target.position),
-                     *(f"{r.temperatures[n]:.8g}" for n in temperature_names),
-                     *(f"{v:.10g}" for v in r.position), f"{r.position_error:.4g}", angle,
-                     int(r.reachable), int(r.verified), f"{r.solve_time_s:.4g}", r.iterations])
-    return write_csv(path, header, rows)
