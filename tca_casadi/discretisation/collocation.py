@@ -26,8 +26,8 @@ import casadi as ca
 import numpy as np
 
 from ..model import boundary
-from ..model.boundary import add as _add
-from ..model.compatibility import compatibility
+from ..model.compatibility import compatibility_residuals
+from ..model.loads import distributed_fields, is_active
 from ..model.rod import STATE_SIZE, rod_equations
 from .mesh import CollocationScheme, build_mesh
 
@@ -74,9 +74,7 @@ class CollocationNLP:
             count = len(mesh.intervals) * (d + 1) * STATE_SIZE
             blocks.append(ca.MX.sym(f"x_{module.name}", count))
             # strains as deviations from xi*, scaled by stiffness: order-one internal wrenches
-            per_node = np.r_[np.full(3, module.length), np.ones(4),
-                             module.force_scale * module.length / module.stiffness[0:3],
-                             module.force_scale / module.stiffness[3:6]]
+            per_node = module.state_scale
             self.node_scale.append(per_node)
             self.state_offset.append(np.r_[np.zeros(7), module.xi_star])
             scales.append(np.tile(per_node, count // STATE_SIZE))
@@ -169,10 +167,8 @@ class CollocationNLP:
     def _active_mask(self, m, s_mid):
         """(nA, n_int) 1 where the actuator runs through the interval with midpoint ``s_mid``."""
         module = self.robot.modules[m]
-        mask = np.zeros((len(module.actuators), len(s_mid)))
-        for k, a in enumerate(module.actuators):
-            mask[k] = (a.route.span[0] < s_mid) & (s_mid < a.route.span[1])
-        return mask
+        return np.array([[float(is_active(a, s)) for s in s_mid] for a in module.actuators]).reshape(
+            len(module.actuators), len(s_mid))
 
     def _tension_field(self, m, active):
         """(nA, npts) tension of each actuator at each collocation point (0 where absent)."""
@@ -184,18 +180,12 @@ class CollocationNLP:
 
     def _distributed(self, m, s_mid, interval_of):
         """Distributed loads (3, npts) each: global force (self-weight included) and moment,
-        body-frame force and moment, per collocation point."""
-        module = self.robot.modules[m]
-        ones = ca.DM.ones(1, interval_of.size)
-        fields = [module.weight_density * self.param("gravity") @ ones] + [ca.MX.zeros(3, interval_of.size)] * 3
-        for load in self.robot.distributed_loads:
-            if load.module != m:
-                continue
-            on = ca.DM(((load.span[0] < s_mid) & (s_mid < load.span[1]))[interval_of].astype(float)).T
-            first = 0 if load.frame == "global" else 2
-            fields[first] = fields[first] + self.param(f"{load.name}.force") @ on
-            fields[first + 1] = fields[first + 1] + self.param(f"{load.name}.moment") @ on
-        return fields
+        body-frame force and moment, per collocation point (:func:`model.loads.distributed_fields`
+        of each interval, spread over its points)."""
+        per_interval = [distributed_fields(self.robot, m, s, self.param) for s in s_mid]
+        spread = np.zeros((len(s_mid), interval_of.size))
+        spread[interval_of, np.arange(interval_of.size)] = 1.0
+        return [ca.horzcat(*[fields[k] for fields in per_interval]) @ ca.DM(spread) for k in range(4)]
 
     # ------------------------------------------------------------------ point wrenches
     def _point_wrenches(self, m, s, before, after):
@@ -206,13 +196,11 @@ class CollocationNLP:
         return boundary.internal_wrench(self.robot.modules[m], x)
 
     def _wrench_scale(self, m):
-        module = self.robot.modules[m]
-        return ca.DM(np.r_[np.full(3, 1 / (module.force_scale * module.length)),
-                           np.full(3, 1 / module.force_scale)])
+        return ca.DM(self.robot.modules[m].wrench_scale)
 
     def _base_wrench(self, m, start):
         """Internal wrench just before the module's base, ``W(0-) = W(0+) + point wrenches``."""
-        return _add(self._wrench(m, start), self._point_wrenches(m, 0.0, None, start))
+        return boundary.base_wrench(self.robot, m, start, self.tension_of, self.param)
 
     # ------------------------------------------------------------------ links
     def _link_intervals(self, m, ends, starts):
@@ -237,23 +225,17 @@ class CollocationNLP:
         """The pose link to each child module (through its connector) and the wrench balance at
         the tip: ``W(L) = point wrenches + what the children put on it`` (none: a free tip)."""
         module = self.robot.modules[m]
-        balance = self._wrench(m, end) - _add(ca.DM.zeros(6), self._point_wrenches(m, module.length, end, None))
-        for c in self.robot.children(m):
-            child, start = self.robot.modules[c], self._states[c][:, 0]
-            position, quaternion = boundary.junction_pose(end, child)
+        starts = {c: self._states[c][:, 0] for c in self.robot.children(m)}
+        for c, start in starts.items():
+            position, quaternion = boundary.junction_pose(end, self.robot.modules[c])
             self._g.append((start[P_] - position) / module.length)
             self._g.append(start[H_] - quaternion)
-            balance = balance - boundary.child_wrench(end, child, self._base_wrench(c, start), self.param)
+        balance = boundary.tip_balance(self.robot, m, end, starts, self.tension_of, self.param)
         self._g.append(balance * self._wrench_scale(m))
 
     # ------------------------------------------------------------------ TCA law
     def _compatibility(self):
-        for actuator in self.robot.unknowns:
-            position = self.robot.actuators.index(actuator)
-            stroke = self._lengths[position] - actuator.reference_length
-            self._g.append(compatibility(actuator, stroke, self.tension_of(actuator),
-                                         self.param(actuator.parameter)[0],
-                                         self.robot.modules[actuator.module].force_scale))
+        self._g.extend(compatibility_residuals(self.robot, self._lengths, self.tension_of, self.param))
 
     # ------------------------------------------------------------------ helpers for solvers
     def node_s(self, m):

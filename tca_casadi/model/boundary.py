@@ -147,6 +147,24 @@ def child_wrench(end, child, base_wrench, param):
     return total
 
 
+def base_wrench(robot, m, start, tension, param):
+    """``W(0-)`` of module m: the internal wrench at its start plus the point wrenches there
+    (what its base support, or its parent's tip, carries)."""
+    return add(internal_wrench(robot.modules[m], start), point_wrenches(robot, m, 0.0, None, start, tension, param))
+
+
+def tip_balance(robot, m, end, starts, tension, param):
+    """``W(L) - point wrenches at L - sum of what the children in ``starts`` ({child: start
+    state}) put on the tip`` (parent tip frame, SPEC section 5): zero at equilibrium when every
+    child is included; with some left out, what those must carry."""
+    module = robot.modules[m]
+    applied = point_wrenches(robot, m, module.length, end, None, tension, param)
+    balance = internal_wrench(module, end) - add(ca.DM.zeros(6), applied)
+    for c, start in starts.items():
+        balance = balance - child_wrench(end, robot.modules[c], base_wrench(robot, c, start, tension, param), param)
+    return balance
+
+
 def add(a, b):
     """Sum where ``None`` means nothing."""
     if a is None:

@@ -58,6 +58,17 @@ def compatibility(actuator, stroke, force, parameter, force_scale):
     return f + s - _sqrt(f * f + s * s + SMOOTHING**2)
 
 
+def compatibility_residuals(robot, lengths, tension, param):
+    """The scaled length condition of every actuator with unknown tension (``robot.unknowns``
+    order); ``lengths[k]`` is the path length of ``robot.actuators[k]`` [m]."""
+    out = []
+    for actuator in robot.unknowns:
+        stroke = lengths[robot.actuators.index(actuator)] - actuator.reference_length
+        out.append(compatibility(actuator, stroke, tension(actuator), param(actuator.parameter)[0],
+                                 robot.modules[actuator.module].force_scale))
+    return out
+
+
 #: a gap below this fraction of the reference length counts as taut (the smoothing leaves
 #: about 1e-9 of it at the switching point)
 TAUT = 1e-7

@@ -95,6 +95,19 @@ class ModuleModel:
         """Natural force of this module, ``EI / L^2`` [N]."""
         return self.bending_stiffness / self.length**2
 
+    @property
+    def state_scale(self):
+        """(13,) scale of the deviation state ``[p, h, u - u*, v - v*]`` that both solvers work
+        in: ``[L, 1, F_s L / K_bt, F_s / K_se]``, so the strains are order-one internal moments
+        and forces (``F_s`` = :attr:`force_scale`)."""
+        return np.r_[np.full(3, self.length), np.ones(4), self.force_scale * self.length / self.stiffness[0:3],
+                     self.force_scale / self.stiffness[3:6]]
+
+    @property
+    def wrench_scale(self):
+        """(6,) factors that make a wrench ``[moment; force]`` order one: ``1/(F_s L)``, ``1/F_s``."""
+        return np.r_[np.full(3, 1 / (self.force_scale * self.length)), np.full(3, 1 / self.force_scale)]
+
 
 class ParameterLayout:
     """Names and slices of the parameter vector: ``'gravity'``, ``'base.position'``,

@@ -2,20 +2,22 @@
 import numpy as np
 from scipy.linalg import expm
 
-from ..model.rotations import rotation_numpy
+import casadi as ca
+
+from ..model.rotations import omega, quaternion_product, rotation_numpy
 
 
 def _hat(u):
+    """The cross-product matrix ``[u]x``."""
     return np.array([[0, -u[2], u[1]], [u[2], 0, -u[0]], [-u[1], u[0], 0]])
 
 
 def _omega(u):
-    ux, uy, uz = u
-    return np.array([[0, -ux, -uy, -uz], [ux, 0, uz, -uy], [uy, -uz, 0, ux], [uz, uy, -ux, 0]])
+    return np.array(omega(ca.DM(u)))
 
 
 def _qmul(a, b):
-    return np.r_[a[0] * b[0] - a[1:] @ b[1:], a[0] * b[1:] + b[0] * a[1:] + np.cross(a[1:], b[1:])]
+    return np.array(quaternion_product(ca.DM(a), ca.DM(b))).ravel()
 
 
 def reference_states(module, s, p0, h0):

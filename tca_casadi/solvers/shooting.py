@@ -29,7 +29,8 @@ from scipy.optimize import root
 
 from ..discretisation.mesh import module_breakpoints
 from ..model import boundary
-from ..model.compatibility import compatibility
+from ..model.compatibility import compatibility_residuals
+from ..model.loads import distributed_fields, is_active
 from ..model.rod import STATE_SIZE, explicit_strain_rate, rod_equations
 from ..model.routes import route_expressions
 from .assemble import build_solution
@@ -77,7 +78,7 @@ class ShootingSolver:
 
     # ------------------------------------------------------------------ unknowns
     def _unknown_scale(self):
-        strains = [_state_scale(self.robot.modules[m])[7:13] for m in self._free]
+        strains = [self.robot.modules[m].state_scale[7:13] for m in self._free]
         tensions = [self.robot.modules[a.module].force_scale for a in self.robot.unknowns]
         return np.r_[np.concatenate(strains), tensions]
 
@@ -249,7 +250,7 @@ class ShootingSolver:
         ``(s, states (13, n) with xi* added, weights)``."""
         module = self.robot.modules[m]
         own = [self.robot.actuators.index(a) for a in module.actuators]
-        scale = _state_scale(module)
+        scale = module.state_scale
         n_act = len(module.actuators)
         size = STATE_SIZE + n_act
         y = np.r_[x0 / scale, np.zeros(n_act)]
@@ -322,8 +323,7 @@ class ShootingSolver:
         robot = self.robot
         tension = lambda a: forces[robot.actuators.index(a)]      # noqa: E731
         param = lambda name: params[robot.layout[name]]             # noqa: E731
-        return _as_array(boundary.add(boundary.internal_wrench(robot.modules[m], state),
-                                      boundary.point_wrenches(robot, m, 0.0, None, state, tension, param)))
+        return _as_array(boundary.base_wrench(robot, m, state, tension, param))
 
 
 # ----------------------------------------------------------------------------- building blocks
@@ -355,7 +355,7 @@ class _SegmentRhs:
     def __init__(self, module, actuators, n_unknowns):
         equations = rod_equations(module.stiffness, module.xi_star, len(actuators))
         rate = explicit_strain_rate(equations)
-        scale = _state_scale(module)
+        scale = module.state_scale
         s = ca.SX.sym("s")
         y = ca.SX.sym("y", STATE_SIZE + len(module.actuators))
         forces = ca.SX.sym("F", len(actuators))
@@ -444,19 +444,14 @@ def _end_function(robot, m, free):
     forces, params, tension, param = _symbols(robot)
     children = [c for c in robot.children(m) if c in free]
     strains = [ca.MX.sym(f"z{c}", 6) for c in children]
-    applied = boundary.point_wrenches(robot, m, module.length, end, None, tension, param)
-    balance = boundary.internal_wrench(module, end) - boundary.add(ca.MX.zeros(6), applied)
     starts = []
     for c, strain in zip(children, strains):
         position, quaternion = boundary.junction_pose(end, robot.modules[c])
-        start = ca.vertcat(position, quaternion, strain)
-        starts.append(start)
-        base = boundary.add(boundary.internal_wrench(robot.modules[c], start),
-                            boundary.point_wrenches(robot, c, 0.0, None, start, tension, param))
-        balance = balance - boundary.child_wrench(end, robot.modules[c], base, param)
+        starts.append(ca.vertcat(position, quaternion, strain))
+    balance = boundary.tip_balance(robot, m, end, dict(zip(children, starts)), tension, param)
     continued = _continued_child(robot, m, free)
     if continued is None:
-        main = balance * ca.DM(_wrench_scale(module))
+        main = balance * ca.DM(module.wrench_scale)
     else:
         main = _junction_start(robot, end, balance, continued, tension, param)
     outputs = [main] + starts
@@ -483,11 +478,7 @@ def _compatibility_function(robot):
     """Function ``(lengths, F, P) -> (residuals, d/d lengths, d/d F)`` of every unknown tension."""
     lengths = ca.MX.sym("l", len(robot.actuators))
     forces, params, tension, param = _symbols(robot)
-    out = []
-    for actuator in robot.unknowns:
-        k = robot.actuators.index(actuator)
-        out.append(compatibility(actuator, lengths[k] - actuator.reference_length, forces[k],
-                                 param(actuator.parameter)[0], robot.modules[actuator.module].force_scale))
+    out = compatibility_residuals(robot, lengths, tension, param)
     r = ca.vertcat(*out) if out else ca.MX(0, 1)
     return ca.Function("compatibility", [lengths, forces, params],
                        [r, ca.jacobian(r, lengths), ca.jacobian(r, forces)])
@@ -515,18 +506,8 @@ def _load_values(robot, m, params):
     """``loads(s_mid)`` -> (12,) distributed loads of a segment: global force (self-weight
     included) and moment, body force and moment per length (:mod:`tca_casadi.model.boundary`
     conventions), from the parameters."""
-    module = robot.modules[m]
     value = lambda name: np.asarray(params[robot.layout[name]], float)      # noqa: E731
-
-    def loads(s_mid):
-        fields = [module.weight_density * value("gravity")] + [np.zeros(3) for _ in range(3)]
-        for load in robot.distributed_loads:
-            if load.module == m and load.span[0] < s_mid < load.span[1]:
-                first = 0 if load.frame == "global" else 2
-                fields[first] = fields[first] + value(f"{load.name}.force")
-                fields[first + 1] = fields[first + 1] + value(f"{load.name}.moment")
-        return np.concatenate(fields)
-    return loads
+    return lambda s_mid: np.concatenate(distributed_fields(robot, m, s_mid, value))
 
 
 def _segments(robot, m):
@@ -537,7 +518,7 @@ def _segments(robot, m):
     out = []
     for s0, s1 in zip(breaks[:-1], breaks[1:]):
         mid = 0.5 * (s0 + s1)
-        active = [k for k, a in enumerate(module.actuators) if a.route.span[0] < mid < a.route.span[1]]
+        active = [k for k, a in enumerate(module.actuators) if is_active(a, mid)]
         out.append((s0, s1, active))
     return out
 
@@ -584,16 +565,6 @@ def _selection(n, columns, offset):
     out = np.zeros((offset + len(columns), n))
     out[offset + np.arange(len(columns)), columns] = 1.0
     return out
-
-
-def _state_scale(module):
-    """Integration scale of the deviation state (same order-one scaling as collocation)."""
-    return np.r_[np.full(3, module.length), np.ones(4), module.force_scale * module.length / module.stiffness[0:3],
-                 module.force_scale / module.stiffness[3:6]]
-
-
-def _wrench_scale(module):
-    return np.r_[np.full(3, 1 / (module.force_scale * module.length)), np.full(3, 1 / module.force_scale)]
 
 
 def _as_array(value):
