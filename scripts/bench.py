@@ -93,10 +93,11 @@ def sweep_paths(sim):
 def bench_problem(name, source, repeats, steps, shooting_repeats, inverse_queries):
     row = {"problem": name}
     row["build_s"], sim = median_time(lambda: _built(source), repeats)
-    solver = sim.solver()
-    row["unknowns"] = int(solver.nlp.w.numel())
-    row["cold_s"], cold = median_time(lambda: sim.solve(), repeats)
+    row["cold_s"], cold = median_time(lambda: sim.solve(), repeats)     # with the error estimate
     row["cold_converged"] = bool(cold.converged)
+    solver = sim.solver()                          # the mesh the cold solve refined to, if it did
+    row["unknowns"] = int(solver.nlp.w.numel())
+    row["intervals"] = "+".join(map(str, cold.accuracy.intervals)) if cold.accuracy else "-"
     nudged = nudge(sim, sim.params)
     row["warm_ipopt_s"], warm = median_time(lambda: solver.solve_ipopt(nudged, cold), max(repeats, 5))
     row["warm_newton_s"], fast = median_time(lambda: solver.solve_newton(nudged, cold.raw["w"]), max(repeats, 5))
@@ -105,7 +106,7 @@ def bench_problem(name, source, repeats, steps, shooting_repeats, inverse_querie
     row["sweep_steps"] = steps
     row["sweep_s"], sweep = median_time(lambda: Sweep(sim, paths, start, stop, steps=steps).run(), repeats)
     row["sweep_completed"] = bool(sweep.completed)
-    reference = Simulation.from_file(source, ["solver.intervals=64", "solver.degree=5"]).solve()
+    reference = Simulation.from_file(source, ["solver.intervals=64", "solver.degree=5", "solver.refine=off"]).solve()
     row["tip_error_collocation_m"] = float(np.linalg.norm(cold.tip_position - reference.tip_position))
     if sim.robot.tcas and inverse_queries:
         row.update(bench_inverse(sim, inverse_queries))
@@ -125,7 +126,7 @@ def equal_accuracy(source, reference, shooting_error, repeats):
     reference itself and the solver tolerance allow)."""
     threshold = max(shooting_error, 1e-12)
     for intervals in (4, 6, 8, 12, 16, 24, 32, 48):
-        sim = Simulation.from_file(source, [f"solver.intervals={intervals}"])
+        sim = Simulation.from_file(source, [f"solver.intervals={intervals}", "solver.refine=off"])
         solution = sim.solve()
         error = float(np.linalg.norm(solution.tip_position - reference.tip_position))
         if error <= threshold:
@@ -192,7 +193,7 @@ def bench_inverse(sim, queries):
     return out
 
 
-COLUMNS = [("problem", "{}"), ("unknowns", "{}"), ("build_s", "{:.3f}"), ("cold_s", "{:.4f}"),
+COLUMNS = [("problem", "{}"), ("unknowns", "{}"), ("intervals", "{}"), ("build_s", "{:.3f}"), ("cold_s", "{:.4f}"),
            ("warm_ipopt_s", "{:.4f}"), ("warm_newton_s", "{:.4f}"), ("sweep_s", "{:.3f}"),
            ("inverse_ipopt_s", "{:.3f}"), ("inverse_reduced_s", "{:.3f}"), ("shooting_s", "{:.3f}"),
            ("shooting_differences_s", "{:.3f}"),

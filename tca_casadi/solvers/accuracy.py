@@ -12,11 +12,13 @@ degree-``d`` errors:
 The solution's global balance residual (:mod:`tca_casadi.model.balance`) must also be at most
 ``BALANCE_TOLERANCE`` (1e-6 of the forces in play).
 
-**Where.** The error that interval ``i`` adds is the change, across it, of the difference of the
-two solutions' scaled states ``e = (x(d+1) - x(d)) / scale`` (positions per module length,
-strains as order-one wrenches): ``eta_i = |e(s_i end) - e(s_i start)|``. Intervals with
-``eta_i >= FLAG_FRACTION * max eta`` are bisected; the solution is carried onto the new mesh by
-interpolation and corrected by Newton; repeat until both estimates meet their tolerances, or the
+**Where.** Each interval gets a share of every unmet tolerance: the position difference it adds
+(the change, across it, of ``p(d+1) - p(d)``) per tip tolerance, and, for each actuator, the
+fraction of its path-length difference that falls in the interval times its tension error per
+tension tolerance. Intervals with a share ``>= FLAG_FRACTION`` of the largest are bisected (every interval, when the last round did not
+halve the largest estimate-to-tolerance ratio: the error then comes from where the indicator
+does not point); the solution is carried onto the new mesh by interpolation and corrected by
+Newton; repeat until both estimates meet their tolerances, or the
 mesh reaches ``solver.max_intervals`` per module (a warning), or ``MAX_ROUNDS``.
 """
 from dataclasses import dataclass, field
@@ -50,6 +52,12 @@ class AccuracyEstimate:
     def met(self):
         return (self.tip_error <= self.tip_tolerance and self.tension_error <= self.tension_tolerance
                 and self.balance <= self.balance_tolerance)
+
+    @property
+    def excess(self):
+        """The largest ratio of an estimate to its tolerance (met when at most 1)."""
+        return max(self.tip_error / self.tip_tolerance, self.tension_error / self.tension_tolerance,
+                   self.balance / self.balance_tolerance)
 
     def as_dict(self):
         return {"tip_error_estimate": self.tip_error, "tension_error_estimate": self.tension_error,
@@ -102,9 +110,10 @@ def _lagrange(nodes, points):
 
 
 def estimate(solver, solution, params, higher):
-    """``(tip error, tension error, indicators per module)`` of ``solution`` (by ``solver``,
-    a CollocationSolver) against ``higher`` (the same meshes at degree d + 1); None if the
-    higher-degree Newton solve fails."""
+    """``(tip error, tension error, indicators)`` of ``solution`` (by ``solver``, a
+    CollocationSolver) against ``higher`` (the same meshes at degree d + 1); None if the
+    higher-degree Newton solve fails. ``indicators`` (:class:`Indicators`) say where the
+    differences arise."""
     w0 = interpolate(solver.nlp, solution.raw["w"], higher.nlp, params)
     better = higher.solve_newton(params, w0)
     if not better.converged:
@@ -113,20 +122,52 @@ def estimate(solver, solution, params, higher):
     tensions = np.array([a.tension for a in solution.actuators.values()])
     better_tensions = np.array([a.tension for a in better.actuators.values()])
     floor = max(float(np.max(np.abs(tensions), initial=0.0)), TENSION_FLOOR)
-    tension = float(np.max(np.abs(better_tensions - tensions), initial=0.0)) / floor
-    return tip, tension, _indicators(solver.nlp, solution.raw["w"], higher.nlp, better.raw["w"])
+    errors = np.abs(better_tensions - tensions) / floor                 # per actuator, robot order
+    indicators = Indicators(solver.nlp, solution.raw["w"], higher.nlp, better.raw["w"], errors)
+    return tip, float(np.max(errors, initial=0.0)), indicators
 
 
-def _indicators(nlp, w, higher, w_higher):
-    """Per module, the error each interval adds: the change across it of the scaled difference
-    between the two solutions, compared at the interval ends."""
-    out = []
-    for m in range(len(nlp.meshes)):
-        low = _interval_ends(nlp, w, m)
-        high = _interval_ends(higher, w_higher, m)
-        difference = (high - low) / nlp.node_scale[m][None, None, :]      # (n_int, 2, 13)
-        out.append(np.linalg.norm(difference[:, 1] - difference[:, 0], axis=1))
-    return out
+class Indicators:
+    """Where the two solutions' differences arise, per module and interval: the position
+    difference each interval adds [m], and its share of each actuator's tension error (by the
+    actuator's path-length difference over the interval)."""
+
+    def __init__(self, nlp, w, higher, w_higher, tension_errors):
+        self.position, self.tension = [], []
+        robot = nlp.robot
+        for m, module in enumerate(robot.modules):
+            low, high = _interval_ends(nlp, w, m), _interval_ends(higher, w_higher, m)
+            difference = high[:, :, 0:3] - low[:, :, 0:3]                    # (n_int, 2, 3)
+            self.position.append(np.linalg.norm(difference[:, 1] - difference[:, 0], axis=1))
+            length = np.abs(_partials(higher, w_higher, m) - _partials(nlp, w, m))   # (nA, n_int)
+            error = np.array([tension_errors[robot.actuators.index(a)] for a in module.actuators])
+            share = length / np.maximum(length.sum(axis=1, keepdims=True), 1e-300) * error[:, None]
+            self.tension.append(share.max(axis=0) if module.actuators else np.zeros(length.shape[1]))
+
+    def flags(self, found):
+        """Intervals to bisect: those carrying at least ``FLAG_FRACTION`` of the largest share of
+        an unmet tolerance: the position difference they add per tip tolerance, and their share
+        of each actuator's tension error per tension tolerance (where only the balance is unmet,
+        the position difference alone)."""
+        tip_unmet = found.tip_error > found.tip_tolerance
+        tension_unmet = found.tension_error > found.tension_tolerance
+        shares = []
+        for position, tension in zip(self.position, self.tension):
+            share = position / found.tip_tolerance if tip_unmet or not tension_unmet else 0 * position
+            if tension_unmet:
+                share = np.maximum(share, tension / found.tension_tolerance)
+            shares.append(share)
+        largest = max((float(np.max(s)) for s in shares if s.size), default=0.0)
+        return [s >= FLAG_FRACTION * largest if largest > 0 else np.zeros(s.size, bool) for s in shares]
+
+
+def _partials(nlp, w, m):
+    """(nA, n_int) partial path lengths [m] of module m's actuators over each interval."""
+    module = nlp.robot.modules[m]
+    if not module.actuators:
+        return np.zeros((0, len(nlp.meshes[m].intervals)))
+    values = np.asarray(w, float)[nlp.partial_index[m]] * module.length
+    return values.reshape(len(module.actuators), -1, order="F")
 
 
 def _interval_ends(nlp, w, m):
@@ -136,14 +177,6 @@ def _interval_ends(nlp, w, m):
     return np.stack([nodes[:, :, 0], end], axis=1)
 
 
-def flags_from(indicators):
-    """Which intervals to bisect: those carrying at least ``FLAG_FRACTION`` of the largest."""
-    largest = max((float(np.max(i)) for i in indicators if i.size), default=0.0)
-    if largest == 0.0:
-        return [np.zeros(i.size, bool) for i in indicators]
-    return [i >= FLAG_FRACTION * largest for i in indicators]
-
-
 def control(solver, solution, params, refine=True):
     """Estimate the accuracy of ``solution`` (by the CollocationSolver ``solver``) and, with
     ``refine`` (and ``solver.refine: auto``), bisect the intervals that carry the error until
@@ -151,7 +184,7 @@ def control(solver, solution, params, refine=True):
     the final mesh (a new one when refined), its solution (with ``accuracy`` set and a warning
     when a tolerance is not met), the :class:`AccuracyEstimate` (None if unavailable)."""
     from .collocation import CollocationSolver
-    options, refinements = solver.options, 0
+    options, refinements, previous = solver.options, 0, None
     while True:
         result = estimate(solver, solution, params, solver.higher)
         if result is None:
@@ -161,7 +194,10 @@ def control(solver, solution, params, refine=True):
         found = AccuracyEstimate(tip, tension, options.tip_tolerance, options.tension_tolerance,
                                  [len(mesh.intervals) for mesh in solver.nlp.meshes], refinements,
                                  balance=solution.balance.relative)
-        meshes = [mesh.bisected(f) for mesh, f in zip(solver.nlp.meshes, flags_from(indicators))]
+        flags = indicators.flags(found)
+        if previous is not None and found.excess > 0.5 * previous.excess:
+            flags = [np.ones(f.size, bool) for f in flags]      # no progress where flagged: everywhere
+        meshes = [mesh.bisected(f) for mesh, f in zip(solver.nlp.meshes, flags)]
         found.limit_reached = not found.met and any(len(m.intervals) > options.max_intervals for m in meshes)
         if found.met or not refine or options.refine == "off" or refinements >= MAX_ROUNDS or found.limit_reached:
             return solver, _attach(solution, found, refine and options.refine == "auto"), found
@@ -172,7 +208,7 @@ def control(solver, solution, params, refine=True):
         trial.message = f"{solution.message}; mesh refined where the error was ({refinements + 1}x)"
         trial.iterations += solution.iterations
         trial.solve_time_s += solution.solve_time_s
-        solver, solution, refinements = finer, trial, refinements + 1
+        solver, solution, refinements, previous = finer, trial, refinements + 1, found
 
 
 def _attach(solution, found, refined):

@@ -94,6 +94,7 @@ def test_every_shipped_scenario_balances(scenarios, name):
     assert solution.converged
     assert solution.balance.relative < 1e-6, solution.balance.as_dict()
     assert not [w for w in solution.warnings if "global balance" in w]
+    assert solution.accuracy.met and solution.accuracy.refinements == 0     # the starting mesh suffices
 
 
 @pytest.mark.parametrize("seed", range(8))
