@@ -221,7 +221,7 @@ def main(argv=None):
     else:
         r = args.repeats
         plan = {"bending_module": (r, 101, r, 10), "twisting_module": (r, 101, 1, 10),
-                "arm": (max(1, r // 2), 101, 1, 5), "elastica": (r, 101, r, 0)}
+                "arm": (max(1, r // 2), 101, 1, 1), "elastica": (r, 101, r, 0)}
     rows = []
     for name, (repeats, steps, shooting_repeats, queries) in plan.items():
         print(f"benchmarking {name} ...", file=sys.stderr, flush=True)
