@@ -30,7 +30,7 @@ def complete(path):
     return True
 
 
-def _kill_runs(command, directory, seed, runs=6):
+def _kill_runs(command, directory, seed, runs=4):
     """Start ``command`` ``runs`` times, killing it (SIGKILL) at random moments; after each, every
     visible file in ``directory`` must be complete."""
     rng = np.random.default_rng(seed)

@@ -27,7 +27,7 @@ RAW = {name: yaml.safe_load((ROOT / "scenarios" / f"{name}.yaml").read_text()) f
 
 LOADER = settings(max_examples=3000 if LONG else 150, derandomize=True, deadline=None,
                   suppress_health_check=[HealthCheck.too_slow])
-ROBOTS = settings(max_examples=60 if LONG else 5, derandomize=True, deadline=None,
+ROBOTS = settings(max_examples=60 if LONG else 3, derandomize=True, deadline=None,
                   suppress_health_check=[HealthCheck.too_slow])
 
 numbers = st.one_of(st.integers(-10**400, 10**400), st.floats(allow_nan=True, allow_infinity=True),
