@@ -45,8 +45,10 @@ class Simulation:
     def set(self, path, value):
         """Set a scenario value by dotted path (units allowed: ``"110 degC"``).
 
-        A parameter (temperature, tension, load, gravity, base pose) changes only the parameter
-        vector; anything else (a length, a route, the mesh) rebuilds the model and solver.
+        A parameter (temperature, tension, load, gravity, base pose, a material's modulus or
+        density, a TCA type's geometry or fit, a route's radius or angle: the names in
+        ``robot.layout``) changes only the parameter vector; anything else (a length, a route's
+        kind or span, the mesh) rebuilds the model and solver.
         """
         if self.scenario._raw is None:           # built in Python, not loaded: start from its data
             from .scenario.sources import SourceMap
@@ -55,8 +57,12 @@ class Simulation:
         raw = apply_overrides(self.scenario._raw, {path: value}, self.scenario._sources)
         scenario = validate(raw, self.scenario._sources)
         if self.robot.structure_key(scenario) == self.robot.structure_key(self.scenario):
-            self.scenario = scenario
-            self.params = self.robot.parameter_vector(scenario)
+            params = self.robot.parameter_vector(scenario)
+            problems = self.robot.problems(params)
+            if problems:
+                Robot.from_scenario(scenario)        # names the scenario key where it can
+                raise ScenarioError(f"--set {path}: " + "; ".join(problems))
+            self.scenario, self.params = scenario, params
             return
         log.info("%s changes the structure: rebuilding", path)
         self.__init__(scenario, self.method)

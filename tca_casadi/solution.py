@@ -11,6 +11,7 @@ import numpy as np
 
 from .errors import SolverError
 from .model.rotations import matrix_to_quaternion
+from .text import signed
 
 
 @dataclass
@@ -176,7 +177,7 @@ class Solution:
         lines = [f"{self.scenario_name}: {state} ({self.method}, {self.iterations} iterations, "
                  f"residual {self.max_residual:.1e}, solve {self.solve_time_s * 1e3:.1f} ms, "
                  f"build {self.build_time_s * 1e3:.0f} ms)",
-                 f"  tip position [mm]: {tip[0]:+.4f} {tip[1]:+.4f} {tip[2]:+.4f}",
+                 f"  tip position [mm]: {signed(tip[0])} {signed(tip[1])} {signed(tip[2])}",
                  f"  {'actuator':<22}{'T [degC]':>9}{'q [mm]':>8}{'F [mN]':>11}{'stroke [mm]':>13}"
                  f"{'free [mm]':>11}{'slack [mm]':>12}"]
         for key, a in self.actuators.items():

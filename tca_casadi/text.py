@@ -10,3 +10,9 @@ def clip(text, limit=80):
     """``text`` cut to about ``limit`` characters (a name or path echoed in a message)."""
     text = str(text)
     return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def signed(value, digits=4):
+    """``value`` with its sign, rounded to ``digits`` decimals; a result that rounds to zero is
+    ``+0.0000`` whatever the sign of the roundoff (so transcripts do not flip between runs)."""
+    return f"{round(float(value), digits) + 0.0:+.{digits}f}"

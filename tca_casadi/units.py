@@ -30,6 +30,7 @@ KINDS = {
     "compliance": ("1/N", "a compliance (strain per newton)"),
     "pressure_per_force2": ("Pa/N^2", "a modulus per force squared"),
     "dimensionless": ("", "a plain number"),
+    "coefficient": ("", "a fit coefficient (a plain number in SI units)"),
 }
 
 _NUMBER_AND_UNIT = re.compile(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*)", re.DOTALL)

@@ -10,8 +10,10 @@ Variables ``w`` (scaled: the physical value is ``scale * w``):
     2. for each module, the partial length of each of its actuators over each interval [/L];
     3. the unknown tensions [/F_s] (TCAs and displacement-controlled tendons), in
        ``robot.unknowns`` order.
-Parameters ``P``: the robot's parameter vector (``robot.layout``): gravity, base pose,
-    temperatures, tendon tensions, load forces/moments/masses.
+Parameters ``P``: the robot's parameter vector (``robot.layout``, declared in
+    :mod:`tca_casadi.model.parameters`): gravity, base pose, material moduli and density, TCA
+    geometry and fits, route placements, temperatures, tendon tensions, load forces/moments/masses.
+    The variables' scales use the scenario's values; the equations use ``P``.
 Constraints ``g`` (equalities, each scaled to order one), per module in order:
     the base pose (first module only); the rod equations at every collocation point,
     ``[p' - R v, h' - Omega h / 2, equilibrium (6)]``; the partial lengths (Gauss quadrature of
@@ -135,9 +137,10 @@ class CollocationNLP:
         dX = X @ derivative
         Xc = X[:, colloc]
         active = self._active_mask(m, nodes[:, 0] + 0.5 * steps)[:, interval_of]   # (nA, npts)
-        rod = rod_equations(module.stiffness, module.xi_star, len(module.actuators)).map(len(colloc))
+        rod = rod_equations(module.xi_star, len(module.actuators)).map(len(colloc))
+        stiffness = boundary.stiffness(module, self.param) @ ca.DM.ones(1, len(colloc))
         kin, eq, speed = rod(Xc, dX[7:13, :],
-                             self._route_data(m, s_colloc, active), self._tension_field(m, active),
+                             self._route_data(m, s_colloc, active), self._tension_field(m, active), stiffness,
                              *self._distributed(m, nodes[:, 0] + 0.5 * steps, interval_of))
         fs, length = module.force_scale, module.length
         eq_scale = np.r_[np.ones(3), np.full(4, length), np.full(3, 1 / fs), np.full(3, length / fs)]
@@ -156,13 +159,18 @@ class CollocationNLP:
         self._module_end(m, ends[:, -1])
 
     def _route_data(self, m, s, active):
-        """Route values ``[r; r'; r'']`` (9, nA npts) at the points ``s`` (zero where inactive)."""
+        """Route values ``[r; r'; r'']`` (9, nA npts) at the points ``s`` (zero where inactive),
+        column ``j nA + k`` for actuator k at point j: each route's unit data placed by its
+        parameters (:meth:`ActuatorModel.route_values`)."""
         module = self.robot.modules[m]
-        data = np.zeros((9, len(module.actuators), len(s)))
+        if not module.actuators:
+            return ca.DM(9, 0)
+        blocks = []
         for k, actuator in enumerate(module.actuators):
-            r, dr, ddr = actuator.route.evaluate(np.clip(s, *actuator.route.span))
-            data[:, k, :] = np.vstack([r, dr, ddr]) * active[k]
-        return ca.DM(data.reshape(9, -1, order="F"))
+            values = actuator.route_values(np.clip(s, *actuator.route.span), self.param)
+            blocks.append(ca.vertcat(*[v if isinstance(v, ca.MX) else ca.MX(ca.DM(v)) for v in values])
+                          * ca.DM(np.tile(active[k], (9, 1))))
+        return ca.reshape(ca.vertcat(*blocks), 9, len(module.actuators) * len(s))
 
     def _active_mask(self, m, s_mid):
         """(nA, n_int) 1 where the actuator runs through the interval with midpoint ``s_mid``."""
@@ -193,7 +201,7 @@ class CollocationNLP:
 
     def _wrench(self, m, x):
         """Internal wrench ``K (xi - xi*)`` [N m; N] of a deviation state."""
-        return boundary.internal_wrench(self.robot.modules[m], x)
+        return boundary.internal_wrench(self.robot.modules[m], x, self.param)
 
     def _wrench_scale(self, m):
         return ca.DM(self.robot.modules[m].wrench_scale)
@@ -213,7 +221,8 @@ class CollocationNLP:
         length = self.robot.modules[m].length
         self._g.append(ca.vec((starts[P_, :] - before[P_, :]) / length))
         self._g.append(ca.vec(starts[H_, :] - before[H_, :]))
-        jump = ca.DM(self.robot.modules[m].stiffness) @ ca.DM.ones(1, starts.shape[1]) * (starts[7:13, :] - before[7:13, :])
+        stiffness = boundary.stiffness(self.robot.modules[m], self.param)
+        jump = stiffness @ ca.DM.ones(1, starts.shape[1]) * (starts[7:13, :] - before[7:13, :])
         columns = []
         for b, (_, s) in enumerate(mesh.intervals[:-1]):
             wrench = self._point_wrenches(m, s, before[:, b], starts[:, b])

@@ -7,21 +7,28 @@ Every function takes CasADi symbols or numbers. States are deviation states
 import casadi as ca
 import numpy as np
 
+from .arith import is_casadi
 from .rod import ANCHOR_WRENCH, POINT_WRENCH
 from .rotations import quaternion_product, rotation_matrix
 
 P_, H_ = slice(0, 3), slice(3, 7)
 
 
-def internal_wrench(module, state):
+def stiffness(module, param):
+    """(6,) stiffness diagonal at the parameters, as a CasADi column."""
+    k = module.stiffness_of(param)
+    return k if is_casadi(k) else ca.DM(k)
+
+
+def internal_wrench(module, state, param):
     """``K (xi - xi*)`` [N m; N] of a deviation state."""
-    return ca.DM(module.stiffness) * state[7:13]
+    return stiffness(module, param) * state[7:13]
 
 
-def tangent_wrench(module, actuator, s, state, tension):
+def tangent_wrench(module, actuator, s, state, tension, param):
     """``[r x F t; F t]`` (body frame) of an actuator at s, ``t`` its unit tangent computed from
     ``state`` (the state on one side of s)."""
-    r, dr, _ = actuator.route.evaluate(s)
+    r, dr, _ = actuator.route_values(s, param)
     u = state[7:10] + ca.DM(module.xi_star[0:3])
     v = state[10:13] + ca.DM(module.xi_star[3:6])
     return ANCHOR_WRENCH(u, v, r[:, 0], dr[:, 0], tension)
@@ -88,10 +95,10 @@ def point_wrenches(robot, m, s, before, after, tension, param):
     module, total = robot.modules[m], None
     if after is not None:
         for actuator in actuators_after(robot, m, s):
-            total = add(total, tangent_wrench(module, actuator, s, after, tension(actuator)))
+            total = add(total, tangent_wrench(module, actuator, s, after, tension(actuator), param))
     if before is not None:
         for actuator in actuators_before(robot, m, s):
-            total = add(total, -tangent_wrench(module, actuator, s, before, tension(actuator)))
+            total = add(total, -tangent_wrench(module, actuator, s, before, tension(actuator), param))
     h = (after if after is not None else before)[H_]
     for load in loads_at(robot, m, s):
         total = add(total, point_load_wrench(load, h, param))
@@ -150,7 +157,7 @@ def child_wrench(end, child, base_wrench, param):
 def base_wrench(robot, m, start, tension, param):
     """``W(0-)`` of module m: the internal wrench at its start plus the point wrenches there
     (what its base support, or its parent's tip, carries)."""
-    return add(internal_wrench(robot.modules[m], start), point_wrenches(robot, m, 0.0, None, start, tension, param))
+    return add(internal_wrench(robot.modules[m], start, param), point_wrenches(robot, m, 0.0, None, start, tension, param))
 
 
 def tip_balance(robot, m, end, starts, tension, param):
@@ -159,7 +166,7 @@ def tip_balance(robot, m, end, starts, tension, param):
     child is included; with some left out, what those must carry."""
     module = robot.modules[m]
     applied = point_wrenches(robot, m, module.length, end, None, tension, param)
-    balance = internal_wrench(module, end) - add(ca.DM.zeros(6), applied)
+    balance = internal_wrench(module, end, param) - add(ca.DM.zeros(6), applied)
     for c, start in starts.items():
         balance = balance - child_wrench(end, robot.modules[c], base_wrench(robot, c, start, tension, param), param)
     return balance

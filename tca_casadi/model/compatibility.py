@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .tca_law import is_casadi
+from .arith import is_casadi
 
 SMOOTHING = 1e-9
 
@@ -48,10 +48,10 @@ def _sqrt(value):
     return np.sqrt(value)
 
 
-def compatibility(actuator, stroke, force, parameter, force_scale):
-    """The scaled length condition of an actuator with unknown tension (see module docstring)."""
-    law = actuator.law
-    scaled = law.residual(stroke, force, parameter) / law.residual_scale
+def compatibility(actuator, law, stroke, force, parameter, force_scale):
+    """The scaled length condition of an actuator with unknown tension (see module docstring);
+    ``law`` is its law at the current parameters (scaled by the nominal law's size)."""
+    scaled = law.residual(stroke, force, parameter) / actuator.law.residual_scale
     if not actuator.tension_only:
         return scaled
     f, s = force / force_scale, -scaled
@@ -63,8 +63,9 @@ def compatibility_residuals(robot, lengths, tension, param):
     order); ``lengths[k]`` is the path length of ``robot.actuators[k]`` [m]."""
     out = []
     for actuator in robot.unknowns:
-        stroke = lengths[robot.actuators.index(actuator)] - actuator.reference_length
-        out.append(compatibility(actuator, stroke, tension(actuator), param(actuator.parameter)[0],
+        law = actuator.law_of(param)
+        stroke = lengths[robot.actuators.index(actuator)] - law.reference_length
+        out.append(compatibility(actuator, law, stroke, tension(actuator), param(actuator.parameter)[0],
                                  robot.modules[actuator.module].force_scale))
     return out
 

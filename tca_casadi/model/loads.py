@@ -15,7 +15,7 @@ def distributed_fields(robot, m, s_mid, param):
     force, plus every distributed load whose span contains it, in its frame."""
     module, gravity = robot.modules[m], param("gravity")
     zero = 0.0 * gravity
-    fields = [module.weight_density * gravity, zero, zero, zero]
+    fields = [module.weight_density_of(param) * gravity, zero, zero, zero]
     for load in robot.distributed_loads:
         if load.module == m and load.span[0] < s_mid < load.span[1]:
             first = 0 if load.frame == "global" else 2

@@ -1,18 +1,28 @@
 """The model of a whole robot: modules in series with their actuators and loads, built from a
-validated scenario, and the layout of the parameter vector (what may change between solves
-without rebuilding anything: temperatures, tendon tensions, loads, gravity, base pose).
+validated scenario, with the parameter vector declared in :mod:`.parameters` (what may change
+between solves without rebuilding anything: temperatures, tendon tensions, loads, gravity,
+base pose, material moduli and density, TCA geometry and fits, route radius and angle).
+
+Everything that depends on a parameter is a method taking ``param(name)`` (numbers or CasADi
+symbols alike): ``module.stiffness_of(param)``, ``actuator.law_of(param)``,
+``actuator.route_values(s, param)``... The plain attributes (``module.stiffness``,
+``actuator.law``, ``actuator.route``...) hold the values at the scenario's parameters; the
+solvers use them only for scaling, and :meth:`Robot.at` gives the robot at other parameters
+(for post-processing).
 
 All lengths in m, forces in N, temperatures in degC.
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Optional
 
 import numpy as np
 
 from ..scenario.checks import fail, route_span
-from .routes import make_route
-from .sections import outline_contains, section_properties, stiffness_diagonal
+from .arith import vector
 from .compatibility import TendonLaw
+from .parameters import ParameterLayout, declare  # noqa: F401  (ParameterLayout: re-exported)
+from .routes import ANGLE_KEY, make_route, reference_path_length
+from .sections import outline_contains, section_properties, stiffness_diagonal
 from .tca_law import TcaLaw
 
 
@@ -30,10 +40,43 @@ class ActuatorModel:
     parameter: str            # 'MODULE.NAME.temperature' | '.tension' | '.displacement'
     control: str = "temperature"
     tension_only: bool = False
+    xi_star: np.ndarray = None        # (6,) the module's reference strains (for l*)
+    tca_type: Optional[str] = None    # the TCA type's name
+    fiber_length_given: bool = False  # the type gives fiber_length (else l* / sin(alpha))
 
     @property
     def key(self):
         return self.parameter.rsplit(".", 1)[0]
+
+    @property
+    def placement_keys(self):
+        """Names of the route's parameters: ``("radius", "angle")`` or ``("radius", "phase")``."""
+        return ("radius", ANGLE_KEY[self.route.kind]) if self.route.has_placement else ()
+
+    def placement_of(self, param):
+        """``(radius, angle)`` of the route from the parameters (``(1, 0)`` for a curve)."""
+        if not self.placement_keys:
+            return 1.0, 0.0
+        return tuple(param(f"{self.key}.route.{k}")[0] for k in self.placement_keys)
+
+    def route_values(self, s, param):
+        """``(r, r', r'')`` (3, n each) at arc lengths ``s`` [m] (numbers) for the placement in
+        the parameters (numbers or CasADi symbols)."""
+        return self.route.placed(np.atleast_1d(np.asarray(s, float)), *self.placement_of(param))
+
+    def reference_length_of(self, param):
+        """``l*`` [m] at the parameters."""
+        return reference_path_length(self.route, self.xi_star, *self.placement_of(param))
+
+    def law_of(self, param):
+        """The actuator's law (:class:`TcaLaw`, :class:`TendonLaw` or None) with its constants
+        read from the parameters."""
+        if self.kind == "tca":
+            return TcaLaw.from_parameters(self.law, param, f"tca_types.{self.tca_type}.",
+                                          self.reference_length_of(param), self.fiber_length_given)
+        if isinstance(self.law, TendonLaw):
+            return TendonLaw(self.reference_length_of(param), self.law.compliance)
+        return self.law
 
     @property
     def unknown_tension(self):
@@ -85,6 +128,28 @@ class ModuleModel:
     actuators: list = field(default_factory=list)
     parent: Optional[int] = None      # index of the module whose tip carries this base
     decoupled: bool = False           # only its net force loads the parent (SPEC section 5)
+    material: str = ""                # the material's name
+    shear_given: bool = False         # the material gives G (else G = E / (2 (1 + nu)))
+    properties: object = None         # SectionProperties
+
+    def moduli_of(self, param):
+        """``(E, G)`` [Pa] of the module's material from the parameters."""
+        prefix = f"materials.{self.material}."
+        youngs = param(prefix + "youngs_modulus")[0]
+        if self.shear_given:
+            return youngs, param(prefix + "shear_modulus")[0]
+        return youngs, youngs / (2.0 * (1.0 + param(prefix + "poisson_ratio")[0]))
+
+    def stiffness_of(self, param):
+        """(6,) diagonal of K at the parameters: ``[E Ix, E Iy, G J, G A, G A, E A]``."""
+        youngs, shear = self.moduli_of(param)
+        p = self.properties
+        return vector(youngs * p.ix, youngs * p.iy, shear * p.torsion, shear * p.area, shear * p.area,
+                      youngs * p.area)
+
+    def weight_density_of(self, param):
+        """``rho A`` [kg/m] at the parameters."""
+        return param(f"materials.{self.material}.density")[0] * self.properties.area
 
     @property
     def bending_stiffness(self):
@@ -107,28 +172,6 @@ class ModuleModel:
     def wrench_scale(self):
         """(6,) factors that make a wrench ``[moment; force]`` order one: ``1/(F_s L)``, ``1/F_s``."""
         return np.r_[np.full(3, 1 / (self.force_scale * self.length)), np.full(3, 1 / self.force_scale)]
-
-
-class ParameterLayout:
-    """Names and slices of the parameter vector: ``'gravity'``, ``'base.position'``,
-    ``'base.quaternion'``, ``'MODULE.TCA.temperature'``, ``'MODULE.TENDON.tension'``,
-    ``'LOAD.force'``, ``'LOAD.moment'``, ``'LOAD.mass'``."""
-
-    def __init__(self):
-        self.slices, self.size = {}, 0
-
-    def add(self, name, size):
-        self.slices[name] = slice(self.size, self.size + size)
-        self.size += size
-
-    def __contains__(self, name):
-        return name in self.slices
-
-    def __getitem__(self, name):
-        return self.slices[name]
-
-    def names(self):
-        return list(self.slices)
 
 
 class Robot:
@@ -190,43 +233,78 @@ class Robot:
                 module.actuators.append(actuator)
                 actuators.append(actuator)
         point_loads, distributed = _loads(scenario)
-        layout, values = _parameters(scenario, actuators, point_loads, distributed)
+        layout, values = declare(scenario, actuators, point_loads, distributed)
         return cls(modules, actuators, point_loads, distributed, layout, values, scenario.name)
 
     def parameter_vector(self, scenario):
         """Parameter values of ``scenario`` (same structure as this robot)."""
-        return _parameters(scenario, self.actuators, self.point_loads, self.distributed_loads)[1]
+        return declare(scenario, self.actuators, self.point_loads, self.distributed_loads)[1]
 
     def rest_parameters(self, values):
-        """Parameters of the unloaded reference state: no gravity, no loads, tendons slack, TCAs at
-        their reference temperature; base pose kept. Its equilibrium is the reference shape."""
-        rest = np.array(values, dtype=float)
-        rest[self.layout["gravity"]] = 0.0
-        for actuator in self.actuators:
-            slot = self.layout[actuator.parameter]
-            rest[slot] = actuator.law.reference_temperature if actuator.kind == "tca" else 0.0
-            # a displacement tendon at q = 0 is exactly taut with no tension: the reference state
-        for name in self.layout.names():
-            if name.endswith((".force", ".moment", ".mass", ".held")):
-                rest[self.layout[name]] = 0.0
-        return rest
+        """Parameters of the unloaded reference state: no gravity, no loads, tendons slack (a
+        displacement tendon at q = 0 is exactly taut with no tension), TCAs at their reference
+        temperature; base pose, materials and geometry kept. Its equilibrium is the reference
+        shape."""
+        return self.layout.rest(values)
 
     def structure_key(self, scenario):
         """A hashable summary of everything that is *not* a parameter (rebuild when it changes)."""
-        data = scenario.model_dump(mode="json")
-        for module in data["modules"]:
-            for actuator in module["actuators"]:
-                actuator.pop("temperature", None)
-                actuator.pop("tension", None)
-        for load in data["loads"]:
-            for key in ("force", "moment", "mass"):
-                load.pop(key, None)
-        for item in data["objects"]:
-            for key in ("mass", "held", "position", "yaw", "size"):
-                item.pop(key)
-        data.pop("gravity"), data.pop("base"), data.pop("name"), data.pop("description")
-        data.pop("inverse", None), data.pop("sequence", None)
-        return repr(data)
+        return repr(self.layout.structure(scenario.model_dump(mode="json")))
+
+    def param_function(self, params):
+        """``param(name)`` -> the (n,) numeric value of a layout entry in ``params``."""
+        params = np.asarray(params, float)
+        return lambda name: np.atleast_1d(params[self.layout[name]])
+
+    def at(self, params):
+        """The robot with every parameter-dependent attribute (stiffness, weight density, routes,
+        laws, reference lengths) evaluated at ``params``; same structure and layout."""
+        param = self.param_function(params)
+        modules = [replace(module, stiffness=module.stiffness_of(param),
+                           weight_density=float(module.weight_density_of(param)), actuators=[])
+                   for module in self.modules]
+        actuators = []
+        for actuator in self.actuators:
+            law = actuator.law_of(param)
+            moved = replace(actuator, route=actuator.route.moved(*actuator.placement_of(param)), law=law,
+                            reference_length=float(actuator.reference_length_of(param)))
+            modules[actuator.module].actuators.append(moved)
+            actuators.append(moved)
+        return Robot(modules, actuators, self.point_loads, self.distributed_loads, self.layout,
+                     np.asarray(params, float), self.name)
+
+    def problems(self, params):
+        """What is physically impossible at ``params`` (a list of messages, empty if none):
+        moduli or TCA sizes out of range, a route outside the body. Checked by sweeps and
+        inverse statics, which move parameters without validating a scenario."""
+        param, out = self.param_function(params), []
+        for module in self.modules:
+            youngs, shear = module.moduli_of(param)
+            if not (youngs > 0 and shear > 0):
+                out.append(f"module {module.name}: E = {youngs:g} Pa and G = {shear:g} Pa must be positive")
+            if module.weight_density_of(param) < 0:
+                out.append(f"module {module.name}: the density must not be negative")
+        for actuator in self.actuators:
+            if actuator.kind == "tca":
+                law = actuator.law_of(param)
+                if not 0 < law.fiber_radius < law.coil_radius:
+                    out.append(f"{actuator.key}: need 0 < fiber_radius < coil_radius "
+                               f"(got {law.fiber_radius:g} m and {law.coil_radius:g} m)")
+                if not 0 < law.pitch_angle < np.pi / 2:
+                    out.append(f"{actuator.key}: pitch_angle {law.pitch_angle:g} rad is outside (0, pi/2)")
+                if not law.shear_coefficients[2] > 0:
+                    out.append(f"{actuator.key}: shear_modulus.a0 must be positive")
+            if actuator.placement_keys:
+                radius = actuator.placement_of(param)[0]
+                if radius < 0 or (radius == 0 and actuator.route.kind == "helix"):
+                    out.append(f"{actuator.key}: route radius {radius:g} m must be positive")
+                    continue
+            module = self.modules[actuator.module]
+            outline = module.section.envelope or module.section
+            points = actuator.route.moved(*actuator.placement_of(param)).samples(400)
+            if not np.all(outline_contains(outline, points[0], points[1])):
+                out.append(f"{actuator.key}: the route passes outside the body")
+        return out
 
 
 # ----------------------------------------------------------------------------- builders
@@ -241,7 +319,9 @@ def _module(scenario, config):
         com = np.array(c.center_of_mass if c.center_of_mass is not None else np.array(c.offset) / 2)
         connector = ConnectorModel(np.array(c.offset), np.array(c.rotation.as_quaternion()), c.mass, com)
     return ModuleModel(config.name, config.length, stiffness, xi_star,
-                       material.density * props.area, config.cross_section, connector)
+                       material.density * props.area, config.cross_section, connector,
+                       material=config.material, shear_given=material.shear_modulus is not None,
+                       properties=props)
 
 
 def _actuator(scenario, index, config, a_index, a_config):
@@ -250,8 +330,9 @@ def _actuator(scenario, index, config, a_index, a_config):
     _check_inside(scenario, index, config, a_index, route)
     xi_star = np.array(list(config.precurvature) + [0.0, 0.0, 1.0])
     reference_length = reference_path_length(route, xi_star)
-    law, control = None, "temperature"
+    law, control, tca_type = None, "temperature", None
     if a_config.kind == "tca":
+        tca_type = a_config.type
         law = TcaLaw.from_type(scenario.tca_types[a_config.type], reference_length)
     else:
         control = a_config.control
@@ -260,20 +341,9 @@ def _actuator(scenario, index, config, a_index, a_config):
                 1.0 / a_config.stiffness if a_config.stiffness is not None else 0.0)
             law = TendonLaw(reference_length, compliance)
     parameter = f"{config.name}.{a_config.name}.{control}"
+    fiber_given = tca_type is not None and scenario.tca_types[tca_type].fiber_length is not None
     return ActuatorModel(a_config.name, index, a_config.kind, route, law, reference_length, parameter,
-                         control, bool(a_config.tension_only))
-
-
-def reference_path_length(route, xi_star, points=4001):
-    """``l*``: length of the route in the reference configuration [m] (composite Simpson rule on
-    a fine grid, ``points`` odd; exact for straight routes and helices on a straight body)."""
-    s = np.linspace(*route.span, points)
-    r, dr, _ = route.evaluate(s)
-    a = xi_star[3:6, None] + np.cross(xi_star[0:3], r, axis=0) + dr
-    speed = np.linalg.norm(a, axis=0)
-    weights = np.ones(points)
-    weights[1:-1:2], weights[2:-1:2] = 4.0, 2.0
-    return float(weights @ speed * (s[1] - s[0]) / 3.0)
+                         control, bool(a_config.tension_only), xi_star, tca_type, fiber_given)
 
 
 def _check_inside(scenario, index, config, a_index, route):
@@ -315,34 +385,3 @@ def _loads(scenario):
             point.append(PointLoadModel(item.name, index, scenario.modules[index].length, "global",
                                         "object", 1.0 / len(item.held_by)))
     return point, distributed
-
-
-def _parameters(scenario, actuators, point_loads, distributed):
-    layout, values = ParameterLayout(), []
-
-    def put(name, value):
-        value = np.atleast_1d(np.asarray(value, dtype=float))
-        layout.add(name, value.size)
-        values.extend(value.tolist())
-
-    put("gravity", scenario.gravity)
-    put("base.position", scenario.base.position)
-    put("base.quaternion", scenario.base.orientation.as_quaternion())
-    configs = {(m.name, a.name): a for m in scenario.modules for a in m.actuators}
-    for actuator in actuators:
-        config = configs[(scenario.modules[actuator.module].name, actuator.name)]
-        put(actuator.parameter, getattr(config, actuator.control))
-    loads = {load.name: load for load in scenario.loads}
-    for item in scenario.objects:
-        put(f"{item.name}.mass", item.mass)
-        put(f"{item.name}.held", float(item.held))
-    for load in point_loads + distributed:
-        if load.kind == "object":
-            continue
-        config = loads[load.name]
-        if config.kind == "mass":
-            put(f"{load.name}.mass", config.mass)
-        else:
-            put(f"{load.name}.force", config.force)
-            put(f"{load.name}.moment", config.moment)
-    return layout, np.array(values)

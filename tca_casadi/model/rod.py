@@ -23,26 +23,27 @@ def path_tangent(u, v, du, dv, r, dr, ddr):
     return t, speed, q
 
 
-def rod_equations(stiffness, xi_star, n_actuators):
-    """Function ``(x, dxi, routes, F, f_glob, l_glob, f_body, l_body) -> (kin, eq, speed)``.
+def rod_equations(xi_star, n_actuators):
+    """Function ``(x, dxi, routes, F, K, f_glob, l_glob, f_body, l_body) -> (kin, eq, speed)``.
 
     ``x`` is the deviation state (module docstring). ``kin`` (7): ``[p', h']``; ``eq`` (6): the residual of equilibrium in the body frame,
     ``[m' + u x m + v x n + l ; n' + u x n + f]`` [N, N/m], which is linear in ``dxi``;
     ``speed`` (n_actuators): ``|a|`` of each route. ``F`` are the tensions [N] (zero for actuators
-    not present at this s); ``f_glob``/``l_glob`` are distributed loads per unit length in the global
-    frame (self-weight included), ``f_body``/``l_body`` in the body frame. ``stiffness`` is the
-    diagonal of K (6,), ``xi_star`` the reference strains (6,), constant along the module.
+    not present at this s); ``K`` the diagonal of the stiffness (6,) [N m^2, N] (a parameter:
+    it follows the material's moduli); ``f_glob``/``l_glob`` are distributed loads per unit length
+    in the global frame (self-weight included), ``f_body``/``l_body`` in the body frame.
+    ``xi_star`` are the reference strains (6,), constant along the module (structure).
     """
     x = ca.SX.sym("x", STATE_SIZE)
     dxi = ca.SX.sym("dxi", 6)
     routes = ca.SX.sym("routes", 9, n_actuators)
     tension = ca.SX.sym("F", n_actuators)
+    k = ca.SX.sym("K", 6)
     loads = [ca.SX.sym(name, 3) for name in ("f_glob", "l_glob", "f_body", "l_body")]
     h = x[3:7]
     u, v = x[7:10] + ca.DM(xi_star[0:3]), x[10:13] + ca.DM(xi_star[3:6])
     du, dv = dxi[0:3], dxi[3:6]
     R = rotation_matrix(h)
-    k = ca.DM(stiffness)
     m = k[0:3] * x[7:10]
     n = k[3:6] * x[10:13]
     f = R.T @ loads[0] + loads[2]
@@ -58,9 +59,9 @@ def rod_equations(stiffness, xi_star, n_actuators):
     eq_n = k[3:6] * dv + ca.cross(u, n) + f
     kin = ca.vertcat(R @ v, 0.5 * omega(u) @ h)
     speed = ca.vertcat(*speeds) if speeds else ca.SX(0, 1)
-    return ca.Function("rod_equations", [x, dxi, routes, tension] + loads,
+    return ca.Function("rod_equations", [x, dxi, routes, tension, k] + loads,
                        [kin, ca.vertcat(eq_m, eq_n), speed],
-                       ["x", "dxi", "routes", "F", "f_glob", "l_glob", "f_body", "l_body"],
+                       ["x", "dxi", "routes", "F", "K", "f_glob", "l_glob", "f_body", "l_body"],
                        ["kin", "eq", "speed"])
 
 

@@ -3,17 +3,15 @@
 ``delta = A_cst (dtheta(T) - dtheta(T_ref)) + F / K_cst(F)``, with
 ``A_cst = l_t r_c cos(alpha)``, ``1/K_cst = l_t r_c^2 cos^2(alpha) / (G_t(F) J_t)``,
 ``J_t = pi r_t^4 / 2``. The residual is multiplied through by ``G_t(F)`` (never divided).
-Every method accepts CasADi symbols or numpy arrays.
+Every method accepts CasADi symbols or numpy arrays, and so may the constants themselves (the
+geometry and the fits are NLP parameters: :meth:`TcaLaw.from_parameters`).
 """
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-
-def is_casadi(value):
-    """True for a CasADi symbol or matrix (checked without importing CasADi)."""
-    return type(value).__module__.split(".")[0] == "casadi"
+from .arith import cos, is_casadi, sin
 
 
 @dataclass(frozen=True)
@@ -41,16 +39,31 @@ class TcaLaw:
                    (tca_type.shear_modulus.a2, tca_type.shear_modulus.a1, tca_type.shear_modulus.a0),
                    tca_type.min_temperature, tca_type.max_temperature)
 
+    @classmethod
+    def from_parameters(cls, nominal, param, prefix, reference_length, fiber_length_given):
+        """The law with every constant read from the parameter vector (``param(name)``, names
+        ``prefix + 'coil_radius'`` ...; see :mod:`tca_casadi.model.parameters`): numbers or CasADi
+        symbols. ``reference_length`` is the path's ``l*`` at those parameters; without a given
+        fiber length it is ``l* / sin(alpha)``. ``nominal`` supplies the validated range."""
+        value = lambda key: param(prefix + key)[0]          # noqa: E731
+        alpha = value("pitch_angle")
+        fiber = value("fiber_length") if fiber_length_given else reference_length / sin(alpha)
+        return cls(value("coil_radius"), value("fiber_radius"), alpha, fiber, reference_length,
+                   value("reference_temperature"),
+                   tuple(value(f"untwist.{c}") for c in ("c2", "c1", "c0")),
+                   tuple(value(f"shear_modulus.{a}") for a in ("a2", "a1", "a0")),
+                   nominal.min_temperature, nominal.max_temperature)
+
     @property
     def stroke_coefficient(self):
         """``A_cst = l_t r_c cos(alpha)`` [m^2]."""
-        return self.fiber_length * self.coil_radius * math.cos(self.pitch_angle)
+        return self.fiber_length * self.coil_radius * cos(self.pitch_angle)
 
     @property
     def compliance_numerator(self):
         """``l_t r_c^2 cos^2(alpha) / J_t`` [1/m]: ``1/K_cst = this / G_t``."""
         polar = math.pi * self.fiber_radius**4 / 2.0
-        return self.fiber_length * self.coil_radius**2 * math.cos(self.pitch_angle)**2 / polar
+        return self.fiber_length * self.coil_radius**2 * cos(self.pitch_angle)**2 / polar
 
     @property
     def monotone_limit(self):
@@ -72,7 +85,7 @@ class TcaLaw:
         """``G_t(F)`` [Pa]: the fit for F >= 0, a positive C1 exponential extension for F < 0."""
         a2, a1, a0 = self.shear_coefficients
         fit = a2 * force**2 + a1 * force + a0
-        if is_casadi(force):
+        if is_casadi(force) or is_casadi(a0):
             import casadi as ca
             extension = a0 * ca.exp(force * a1 / a0)
             return ca.if_else(force >= 0, fit, extension)

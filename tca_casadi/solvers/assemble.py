@@ -85,6 +85,7 @@ def build_solution(robot, params, module_data, tensions, lengths, status):
     """Solution from ``module_data = [(s, states, base_wrench_body, weights), ...]``, tensions per
     actuator (list in ``robot.actuators`` order) and lengths; ``status`` holds converged,
     status, message, method, max_residual, iterations, solve_time_s, build_time_s, raw."""
+    robot = robot.at(params)          # stiffness, routes, laws at these parameters
     modules = [module_result(robot.modules[m], *data) for m, data in enumerate(module_data)]
     actuators = {}
     for k, actuator in enumerate(robot.actuators):

@@ -256,6 +256,8 @@ class ShootingSolver:
         y = np.r_[x0 / scale, np.zeros(n_act)]
         S = None if D0 is None else np.vstack([D0 / scale[:, None], np.zeros((n_act, D0.shape[1]))])
         loads_of = _load_values(self.robot, m, params)
+        param = self.robot.param_function(params)
+        constants = module.stiffness_of(param)
         out_s, out_x, out_w = [], [], []
         for index, (s0, s1, active) in enumerate(self._segments[m]):
             if index > 0:
@@ -263,7 +265,8 @@ class ShootingSolver:
             rhs = self._rhs[m][index]
             columns = [own[k] for k in active]
             F_act, dF_act = forces[columns], (None if dF is None else dF[columns].ravel(order="F"))
-            loads = loads_of(0.5 * (s0 + s1))
+            loads = np.r_[loads_of(0.5 * (s0 + s1)), constants,
+                          [v for k in active for v in module.actuators[k].placement_of(param)]]
             budget = [RHS_BUDGET]
 
             def derivative(s, state, rhs=rhs, F_act=F_act, dF_act=dF_act, loads=loads, budget=budget):
@@ -348,22 +351,25 @@ def _continued_child(robot, m, free):
 
 class _SegmentRhs:
     """The explicit right-hand side of one segment (routes inside), evaluated through CasADi's
-    buffer API: ``value(s, y, F, loads) -> y'`` and, for the variational equations,
-    ``augmented(s, [y; vec S], F, dF, loads) -> [y'; vec(df/dy S + df/dF dF)]`` (column-major
-    ``vec``), with ``n_unknowns`` columns of S."""
+    buffer API: ``value(s, y, F, c) -> y'`` and, for the variational equations,
+    ``augmented(s, [y; vec S], F, dF, c) -> [y'; vec(df/dy S + df/dF dF)]`` (column-major
+    ``vec``), with ``n_unknowns`` columns of S. ``c`` holds what is constant over the segment:
+    the distributed loads (12), the stiffness diagonal (6) and each active route's placement
+    ``(radius, angle)``."""
 
     def __init__(self, module, actuators, n_unknowns):
-        equations = rod_equations(module.stiffness, module.xi_star, len(actuators))
+        equations = rod_equations(module.xi_star, len(actuators))
         rate = explicit_strain_rate(equations)
         scale = module.state_scale
         s = ca.SX.sym("s")
         y = ca.SX.sym("y", STATE_SIZE + len(module.actuators))
         forces = ca.SX.sym("F", len(actuators))
-        loads = ca.SX.sym("loads", 12)
-        columns = [ca.vertcat(*route_expressions(a.route, s)) for a in actuators]
+        loads = ca.SX.sym("c", 18 + 2 * len(actuators))
+        columns = [ca.vertcat(*route_expressions(a.route, s, loads[18 + 2 * k], loads[19 + 2 * k]))
+                   for k, a in enumerate(actuators)]
         routes = ca.horzcat(*columns) if columns else ca.SX(9, 0)
         x = y[:STATE_SIZE] * ca.DM(scale)
-        split = [loads[3 * k:3 * k + 3] for k in range(4)]
+        split = [loads[12:18]] + [loads[3 * k:3 * k + 3] for k in range(4)]
         dxi = rate(x, routes, forces, *split)
         kin, _, speed = equations(x, dxi, routes, forces, *split)
         speeds = ca.SX.zeros(len(module.actuators))
@@ -402,23 +408,25 @@ def _strains_after(robot, m, s, before_pose, target, tension, param):
     """Deviation strains just after s solving ``K dxi + (point wrenches after s)(dxi) = target``
     (a CasADi rootfinder when actuators pull there with the tangent after s; else explicit)."""
     module = robot.modules[m]
-    stiffness = ca.DM(module.stiffness)
     if not boundary.actuators_after(robot, m, s):
-        return target / stiffness
+        return target / boundary.stiffness(module, param)
     delta = ca.MX.sym("delta", 6)
     data = ca.MX.sym("data", 7 + 6 + len(robot.actuators) + robot.layout.size)
     forces = data[13:13 + len(robot.actuators)]
+    inner = data[13 + len(robot.actuators):]
+    inner_param = lambda name: inner[robot.layout[name]]            # noqa: E731
+    stiffness = boundary.stiffness(module, inner_param)
     state = ca.vertcat(data[0:7], delta)
     t = lambda a: forces[robot.actuators.index(a)]                 # noqa: E731
     residual = stiffness * delta - data[7:13]
     for actuator in boundary.actuators_after(robot, m, s):
-        residual += boundary.tangent_wrench(module, actuator, s, state, t(actuator))
+        residual += boundary.tangent_wrench(module, actuator, s, state, t(actuator), inner_param)
     solver = ca.rootfinder("jump_solver", "newton",
                            ca.Function("jump", [delta, data], [residual / stiffness]),
                            {"abstol": 1e-15, "max_iter": 50, "error_on_fail": False})
     forces_all = ca.vertcat(*[tension(a) for a in robot.actuators]) if robot.actuators else ca.MX(0, 1)
     params_all = ca.vertcat(*[param(name) for name in robot.layout.names()])
-    return solver(target / stiffness, ca.vertcat(before_pose, target, forces_all, params_all))
+    return solver(target / boundary.stiffness(module, param), ca.vertcat(before_pose, target, forces_all, params_all))
 
 
 def _jump_function(robot, m, s):
@@ -428,7 +436,7 @@ def _jump_function(robot, m, s):
     x_before = ca.MX.sym("x", STATE_SIZE)
     forces, params, tension, param = _symbols(robot)
     rest = boundary.point_wrenches(robot, m, s, x_before, None, tension, param)
-    target = boundary.add(boundary.internal_wrench(module, x_before), None if rest is None else -rest)
+    target = boundary.add(boundary.internal_wrench(module, x_before, param), None if rest is None else -rest)
     strains = _strains_after(robot, m, s, x_before[0:7], target, tension, param)
     x_after = ca.vertcat(x_before[0:7], strains)
     return ca.Function(f"jump_{m}", [x_before, forces, params],
@@ -555,7 +563,7 @@ def _reference_trajectory(robot, params):
     samples = [s for s, _ in grids]
     module_data = [(s, states, np.zeros(6), w)
                    for (s, w), states in zip(grids, reference_chain(robot, params, samples))]
-    return module_data, [0.0] * len(robot.actuators), [a.reference_length for a in robot.actuators]
+    return module_data, [0.0] * len(robot.actuators), [a.reference_length for a in robot.at(params).actuators]
 
 
 def _selection(n, columns, offset):

@@ -69,7 +69,7 @@ def reduced_attempt(inverse, w0, tau0, vector):
         return r_w.sparse() @ rate + np.array(r_tau)
 
     result = least_squares(residuals, np.clip(tau0, 0.0, 1.0), jac=jacobian, bounds=(0.0, 1.0),
-                           method="trf", x_scale=1.0, xtol=1e-12, ftol=1e-12, gtol=1e-10,
+                           method="dogbox", x_scale=1.0, xtol=1e-10, ftol=1e-10, gtol=1e-10,
                            max_nfev=200)
     tau = np.clip(result.x, 0.0, 1.0)
     w = equilibria(tau)

@@ -5,6 +5,7 @@ from typing import Optional
 
 import numpy as np
 
+from ..text import signed
 from .targets import Target
 
 
@@ -70,8 +71,8 @@ class InverseResult:
     def summary(self):
         state = "REACHED" if self.reachable else "UNREACHABLE"
         lines = [f"inverse: {state} ({self.message})",
-                 "  target [mm]:   " + " ".join(f"{v * 1e3:+.4f}" for v in self.target.position),
-                 "  achieved [mm]: " + " ".join(f"{v * 1e3:+.4f}" for v in self.position),
+                 "  target [mm]:   " + " ".join(signed(v * 1e3) for v in self.target.position),
+                 "  achieved [mm]: " + " ".join(signed(v * 1e3) for v in self.position),
                  f"  position error {self.position_error * 1e3:.4g} mm"
                  + ("" if self.angle_error is None else f", angle error {np.degrees(self.angle_error):.4g} deg"),
                  f"  forward check: {self.verification_difference:.2e} m "

@@ -9,6 +9,11 @@ vector entry, or its magnitude:
     MOD.TENDON.displacement      a displacement-controlled tendon's pull q [m]
     payload.force.x  (or .y, .z, [0], [1], [2])   one component [N]
     gravity.magnitude            the length of a vector, its direction kept [m/s^2]
+    materials.silicone.youngs_modulus   a material's E [Pa] (also poisson_ratio, density)
+    tca_types.nylon.coil_radius  a TCA type's geometry or fit coefficient
+    bending.tca1.route.radius    a straight route's radius or angle, a helix's radius or phase
+
+(every name of ``robot.layout``: :mod:`tca_casadi.model.parameters`).
 """
 from dataclasses import dataclass
 
@@ -18,12 +23,11 @@ from ..errors import ScenarioError
 from ..scenario.checks import closest
 from ..units import to_si
 
-#: last word of a layout name -> unit kind (for values given with units and CSV headers)
-KIND_OF = {"temperature": "temperature", "tension": "force", "displacement": "length", "force": "force", "moment": "moment",
-           "mass": "mass", "gravity": "acceleration", "position": "length",
-           "quaternion": "dimensionless", "held": "dimensionless"}
-UNIT_OF = {"temperature": "degC", "force": "N", "moment": "N m", "mass": "kg",
-           "acceleration": "m/s^2", "length": "m", "dimensionless": "-"}
+#: unit kind -> the unit written in labels and CSV headers
+UNIT_OF = {"temperature": "degC", "force": "N", "moment": "N m", "mass": "kg", "acceleration": "m/s^2",
+           "length": "m", "angle": "rad", "pressure": "Pa", "density": "kg/m^3", "force_per_length": "N/m",
+           "moment_per_length": "N m/m", "pressure_per_force": "Pa/N", "pressure_per_force2": "Pa/N^2",
+           "coefficient": "SI", "dimensionless": "-"}
 COMPONENTS = {"x": 0, "y": 1, "z": 2, "[0]": 0, "[1]": 1, "[2]": 2, "[3]": 3}
 
 
@@ -76,7 +80,7 @@ def resolve_parameter(robot, params, path):
         raise ScenarioError(f"{path!r} is not a study parameter{closest(path, _scalar_paths(layout))}"
                             f" (vectors take .x/.y/.z or .magnitude)")
     size = layout[name].stop - layout[name].start
-    kind = KIND_OF[name.rsplit(".", 1)[-1]]
+    kind = layout.kind(name)
     if component is None:
         if size != 1:
             raise ScenarioError(f"{path!r} is a vector of {size}: name one component "
@@ -127,12 +131,20 @@ def resolve_parameters(robot, params, paths):
     return resolved
 
 
-def check_range(robot, parameter, *values):
-    """A TCA temperature swept or varied outside its type's validated range is an error (the
-    same bounds as the scenario's ``min_temperature`` / ``max_temperature``)."""
-    if parameter.kind != "temperature":
+def check_range(robot, parameter, *values, params=None):
+    """A value that a sweep or inverse statics would reach and a scenario could not hold is an
+    error: a TCA temperature outside its type's validated range (the scenario's
+    ``min_temperature`` / ``max_temperature``) or, at ``params`` otherwise, anything
+    :meth:`Robot.problems` finds (a modulus not positive, a route outside the body...)."""
+    actuator = next((a for a in robot.actuators if a.parameter == parameter.name), None)
+    if actuator is None or actuator.kind != "tca":
+        if params is None or parameter.kind in ("force", "moment", "mass", "acceleration"):
+            return
+        for value in np.ravel(values):
+            problems = robot.problems(parameter.with_value(params, value))
+            if problems:
+                raise ScenarioError(f"{parameter.path} = {value:g} {parameter.unit}: " + "; ".join(problems))
         return
-    actuator = next(a for a in robot.actuators if a.parameter == parameter.name)
     law = actuator.law
     for value in np.ravel(values):
         if not law.min_temperature <= value <= law.max_temperature:

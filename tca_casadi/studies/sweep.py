@@ -69,7 +69,7 @@ class Sweep:
         self.start = self._values(start, "start")
         self.stop = self._values(stop, "stop")
         for parameter, a, b in zip(self.parameters, self.start, self.stop):
-            check_range(sim.robot, parameter, a, b)
+            check_range(sim.robot, parameter, a, b, params=sim.params)
         base = sim.params.copy()
         for parameter, value in zip(self.parameters, self.start):
             base = parameter.with_value(base, value)

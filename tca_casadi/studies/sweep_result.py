@@ -6,6 +6,7 @@ import numpy as np
 
 from ..model.rotations import matrix_to_quaternion
 from ..output import write_csv, write_json
+from ..text import signed
 
 
 @dataclass
@@ -98,7 +99,7 @@ class SweepResult:
         if self.points:
             first, last = self.points[0], self.points[-1]
             move = (last.solution.tip_position - first.solution.tip_position) * 1e3
-            lines.append("  tip moved [mm]: " + " ".join(f"{v:+.4f}" for v in move))
+            lines.append("  tip moved [mm]: " + " ".join(signed(v) for v in move))
         lines += [f"  event: {event['message']}" for event in self.events]
         return "\n".join(lines)
 
@@ -150,9 +151,10 @@ def find_events(robot, points, parameters):
             if not actuator.tension_only and (fa * fb < 0 or (fa != 0 and fb == 0)):
                 event("tension_sign", between(fa / (fa - fb)),
                       f"{actuator.key} tension changes sign ({fa * 1e3:.4g} -> {fb * 1e3:.4g} mN)")
-            limit = actuator.law.monotone_limit
-            if (fa - limit) * (fb - limit) < 0:
-                event("fit_range", between((fa - limit) / (fa - fb)),
+            la, lb = (actuator.law_of(robot.param_function(p.solution.parameters)).monotone_limit for p in (a, b))
+            if (fa - la) * (fb - lb) < 0:
+                limit = 0.5 * (la + lb)
+                event("fit_range", between((fa - la) / ((fa - la) - (fb - lb))),
                       f"{actuator.key} tension crosses the fit's monotone limit {limit * 1e3:.4g} mN")
         if a.lam_rate * b.lam_rate < 0:
             event("fold", _turning_lambda(points, index),

@@ -1,0 +1,65 @@
+"""Arithmetic that works on numbers, numpy arrays and CasADi symbols alike, so that each piece
+of physics is written once and evaluated symbolically (inside an NLP) or numerically (in
+post-processing) from the same code."""
+import math
+
+import numpy as np
+
+
+def is_casadi(value):
+    """True for a CasADi symbol or matrix (checked without importing CasADi)."""
+    return type(value).__module__.split(".")[0] == "casadi"
+
+
+def _casadi():
+    import casadi as ca
+    return ca
+
+
+def cos(x):
+    return _casadi().cos(x) if is_casadi(x) else np.cos(x)
+
+
+def sin(x):
+    return _casadi().sin(x) if is_casadi(x) else np.sin(x)
+
+
+def sqrt(x):
+    return _casadi().sqrt(x) if is_casadi(x) else np.sqrt(x)
+
+
+def exp(x):
+    return _casadi().exp(x) if is_casadi(x) else np.exp(x)
+
+
+def vector(*items):
+    """Column of the scalars ``items``: a CasADi column if any is symbolic, else a numpy array."""
+    if any(is_casadi(item) for item in items):
+        return _casadi().vertcat(*items)
+    return np.array([float(item) for item in items])
+
+
+def scalar(value):
+    """A number as a float; a CasADi expression unchanged (first entry of a length-1 vector)."""
+    if is_casadi(value):
+        return value[0] if value.numel() > 1 else value
+    return float(np.ravel(value)[0])
+
+
+def placement_matrix(radius, angle):
+    """``radius Rz(angle)`` (3, 3): a route's unit data (radius 1, angle 0) placed on the body."""
+    c, s = cos(angle), sin(angle)
+    if is_casadi(radius) or is_casadi(angle):
+        ca = _casadi()
+        return radius * ca.vertcat(ca.horzcat(c, -s, 0), ca.horzcat(s, c, 0), ca.horzcat(0, 0, 1))
+    return float(radius) * np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def matmul(matrix, data):
+    """``matrix @ data`` for a numpy or CasADi ``matrix`` and numpy ``data``."""
+    if is_casadi(matrix):
+        return _casadi().mtimes(matrix, _casadi().DM(data))
+    return matrix @ data
+
+
+__all__ = ["is_casadi", "cos", "sin", "sqrt", "exp", "vector", "scalar", "placement_matrix", "matmul", "math"]

@@ -1,0 +1,187 @@
+"""What may change between solves without rebuilding anything, declared in one place.
+
+Every entry of the parameter vector ``P`` is declared by :func:`declare` with its name, its unit
+kind (:data:`tca_casadi.units.KINDS`), the scenario key it is read from, and its value in the
+unloaded reference state. From these declarations alone come the layout (names and slices),
+the values of a scenario, the reference-state parameters (:meth:`ParameterLayout.rest`) and the
+structure key (the scenario without its parameters: when it changes, the model is rebuilt).
+
+The entries, in this order:
+
+=====================================================  ========================  =============
+name                                                   what                      at rest
+=====================================================  ========================  =============
+``gravity``                                            (3,) [m/s^2]              zero
+``base.position``, ``base.quaternion``                 the base pose             kept
+``materials.M.youngs_modulus``                         E [Pa]                    kept
+``materials.M.poisson_ratio`` or ``.shear_modulus``    G = E / (2 (1 + nu)) or G kept
+``materials.M.density``                                [kg/m^3]                  kept
+``tca_types.T.fiber_radius``, ``.coil_radius``,        geometry [m, rad]         kept
+``.pitch_angle`` (and ``.fiber_length`` if given)
+``tca_types.T.reference_temperature``                  [degC]                    kept
+``tca_types.T.untwist.c2|c1|c0``                       untwist fit [rad/m/degC^k] kept
+``tca_types.T.shear_modulus.a2|a1|a0``                 modulus fit [Pa/N^k]      kept
+``MODULE.ACTUATOR.route.radius``, ``.angle``/``.phase``  straight and helix routes kept
+``MODULE.TCA.temperature``                             [degC]                    its reference
+``MODULE.TENDON.tension`` / ``.displacement``          [N] / [m]                 zero
+``OBJECT.mass``, ``OBJECT.held``                       [kg], 0 or 1              zero
+``LOAD.mass`` or ``LOAD.force``, ``LOAD.moment``       [kg] or [N], [N m]        zero
+=====================================================  ========================  =============
+
+Only materials and TCA types that some module or actuator uses are declared.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+#: keys of the scenario that are neither parameters nor structure (they never change a solve)
+IGNORED = (("name",), ("description",), ("inverse",), ("sequence",))
+#: keys of each grasped object that only drawings use
+OBJECT_DRAWING = ("position", "yaw", "size")
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One declared parameter: ``name``, unit ``kind``, the scenario key ``source`` it comes
+    from (a path in ``scenario.model_dump(mode="json")``) and ``rest``: ``None`` keeps the value
+    in the reference state, a number replaces it, a name copies that entry's value."""
+    name: str
+    kind: str
+    source: tuple
+    rest: object = None
+
+
+class ParameterLayout:
+    """Names, slices, unit kinds and reference-state rules of the parameter vector."""
+
+    def __init__(self):
+        self.slices, self.entries, self.size = {}, {}, 0
+
+    def add(self, entry, size):
+        self.slices[entry.name] = slice(self.size, self.size + size)
+        self.entries[entry.name] = entry
+        self.size += size
+
+    def __contains__(self, name):
+        return name in self.slices
+
+    def __getitem__(self, name):
+        return self.slices[name]
+
+    def names(self):
+        return list(self.slices)
+
+    def kind(self, name):
+        """Unit kind of an entry (a key of :data:`tca_casadi.units.KINDS`)."""
+        return self.entries[name].kind
+
+    def rest(self, values):
+        """Parameters of the unloaded reference state (see the module docstring)."""
+        rest = np.array(values, dtype=float)
+        for name, entry in self.entries.items():
+            if isinstance(entry.rest, str):
+                rest[self.slices[name]] = np.asarray(values, float)[self.slices[entry.rest]]
+            elif entry.rest is not None:
+                rest[self.slices[name]] = entry.rest
+        return rest
+
+    def structure(self, data):
+        """``data`` (a scenario dump, modified in place) without any parameter or ignored key."""
+        for path in [entry.source for entry in self.entries.values()] + list(IGNORED):
+            _drop(data, path)
+        for item in data.get("objects", []):
+            for key in OBJECT_DRAWING:
+                item.pop(key, None)
+        return data
+
+
+def _drop(data, path):
+    for key in path[:-1]:
+        try:
+            data = data[key]
+        except (KeyError, IndexError, TypeError):
+            return
+    if isinstance(data, dict):
+        data.pop(path[-1], None)
+
+
+def declare(scenario, actuators, point_loads, distributed):
+    """``(layout, values)`` of ``scenario`` for a robot with these actuators and loads."""
+    layout, values = ParameterLayout(), []
+
+    def put(name, value, kind, source, rest=None):
+        value = np.atleast_1d(np.asarray(value, dtype=float))
+        layout.add(Entry(name, kind, tuple(source), rest), value.size)
+        values.extend(value.tolist())
+
+    put("gravity", scenario.gravity, "acceleration", ("gravity",), 0.0)
+    put("base.position", scenario.base.position, "length", ("base", "position"))
+    put("base.quaternion", scenario.base.orientation.as_quaternion(), "dimensionless", ("base", "orientation"))
+    for name in dict.fromkeys(module.material for module in scenario.modules):
+        _material(put, name, scenario.materials[name])
+    used = dict.fromkeys(a.type for m in scenario.modules for a in m.actuators if a.kind == "tca")
+    for name in used:
+        _tca_type(put, name, scenario.tca_types[name])
+    for actuator in actuators:
+        source, config = _actuator_source(scenario, actuator)
+        for key in actuator.placement_keys:
+            put(f"{actuator.key}.route.{key}", getattr(config.route, key), "length" if key == "radius" else "angle",
+                source + ("route", key))
+    for actuator in actuators:
+        source, config = _actuator_source(scenario, actuator)
+        rest = f"tca_types.{config.type}.reference_temperature" if actuator.kind == "tca" else 0.0
+        kind = {"temperature": "temperature", "tension": "force", "displacement": "length"}[actuator.control]
+        put(actuator.parameter, getattr(config, actuator.control), kind, source + (actuator.control,), rest)
+    for k, item in enumerate(scenario.objects):
+        put(f"{item.name}.mass", item.mass, "mass", ("objects", k, "mass"), 0.0)
+        put(f"{item.name}.held", float(item.held), "dimensionless", ("objects", k, "held"), 0.0)
+    positions = {load.name: k for k, load in enumerate(scenario.loads)}
+    for load in point_loads + distributed:
+        if load.kind == "object":
+            continue
+        k = positions[load.name]
+        config = scenario.loads[k]
+        if config.kind == "mass":
+            put(f"{load.name}.mass", config.mass, "mass", ("loads", k, "mass"), 0.0)
+        else:
+            put(f"{load.name}.force", config.force, "force" if config.kind == "point" else "force_per_length",
+                ("loads", k, "force"), 0.0)
+            put(f"{load.name}.moment", config.moment, "moment" if config.kind == "point" else "moment_per_length",
+                ("loads", k, "moment"), 0.0)
+    return layout, np.array(values)
+
+
+def _actuator_source(scenario, actuator):
+    """``(path of the actuator in the scenario dump, its scenario entry)``."""
+    entries = scenario.modules[actuator.module].actuators
+    k = [a.name for a in entries].index(actuator.name)
+    return ("modules", actuator.module, "actuators", k), entries[k]
+
+
+def _material(put, name, material):
+    prefix, source = f"materials.{name}.", ("materials", name)
+    put(prefix + "youngs_modulus", material.youngs_modulus, "pressure", source + ("youngs_modulus",))
+    if material.shear_modulus is not None:
+        put(prefix + "shear_modulus", material.shear_modulus, "pressure", source + ("shear_modulus",))
+    else:
+        nu = 0.5 if material.poisson_ratio is None else material.poisson_ratio
+        put(prefix + "poisson_ratio", nu, "dimensionless", source + ("poisson_ratio",))
+    put(prefix + "density", material.density, "density", source + ("density",))
+
+
+#: a TCA type's parameters: key -> unit kind (``fiber_length`` only when the scenario gives it)
+TCA_KEYS = {"fiber_radius": "length", "coil_radius": "length", "pitch_angle": "angle",
+            "fiber_length": "length", "reference_temperature": "temperature",
+            "untwist.c2": "coefficient", "untwist.c1": "coefficient", "untwist.c0": "coefficient",
+            "shear_modulus.a2": "pressure_per_force2", "shear_modulus.a1": "pressure_per_force",
+            "shear_modulus.a0": "pressure"}
+
+
+def _tca_type(put, name, tca_type):
+    for key, kind in TCA_KEYS.items():
+        value = tca_type
+        for part in key.split("."):
+            value = getattr(value, part)
+        if value is None:
+            continue
+        put(f"tca_types.{name}.{key}", value, kind, ("tca_types", name) + tuple(key.split(".")))
