@@ -92,8 +92,8 @@ def build_parser():
                          help="position error under which the target counts as reached (default 0.1 mm)")
     inverse.add_argument("--starts", type=int, default=None, help="initial temperature sets tried (default 4)")
     inverse.add_argument("--method", choices=["ipopt", "reduced"], default=None,
-                         help="ipopt: the full-space NLP (default); reduced: least squares over the "
-                              "temperatures with the equilibrium solved and differentiated exactly (faster)")
+                         help="reduced (default): least squares over the temperatures with the equilibrium "
+                              "solved and differentiated exactly; ipopt: the full-space NLP (slower)")
     inverse.add_argument("--path", type=Path, default=None, metavar="CSV",
                          help="a CSV of targets (x, y, z [m], optional dx, dy, dz or qw..qz): one answer per row")
     _output_arguments(inverse, "inverse", "inverse.png")

@@ -258,7 +258,17 @@ class Robot:
 
     def at(self, params):
         """The robot with every parameter-dependent attribute (stiffness, weight density, routes,
-        laws, reference lengths) evaluated at ``params``; same structure and layout."""
+        laws, reference lengths) evaluated at ``params``; same structure and layout (the last
+        few are kept: post-processing asks for the same parameters repeatedly)."""
+        key = np.asarray(params, float).tobytes()
+        cache = self.__dict__.setdefault("_at_cache", {})
+        if key not in cache:
+            if len(cache) >= 8:
+                cache.pop(next(iter(cache)))
+            cache[key] = self._evaluated(params)
+        return cache[key]
+
+    def _evaluated(self, params):
         param = self.param_function(params)
         modules = [replace(module, stiffness=module.stiffness_of(param),
                            weight_density=float(module.weight_density_of(param)), actuators=[])

@@ -418,7 +418,7 @@ class InverseOptions(Strict):
     regularisation: Annotated[float, Field(ge=0)] = 1e-3
     orientation_weight: Annotated[float, Field(ge=0)] = 1.0
     starts: int = Field(default=4, ge=1, le=64)
-    method: Literal["ipopt", "reduced"] = "ipopt"
+    method: Literal["ipopt", "reduced"] = "reduced"
 
 
 # ----------------------------------------------------------------------------- sequences

@@ -108,12 +108,13 @@ class CollocationSolver:
         """:class:`Linearisation` of the square system at scaled variables ``w`` and ``params``."""
         return self.square.linearise(w, params)
 
-    def solve_newton(self, params, w0):
+    def solve_newton(self, params, w0, lu=None):
         """Newton's method on the square system from scaled variables ``w0`` (a predictor):
-        the same equations and tolerance as :meth:`solve`, without IPOPT's machinery."""
+        the same equations and tolerance as :meth:`solve`, without IPOPT's machinery (``lu``: a
+        factorised Jacobian from a nearby point for the first chord steps)."""
         params = np.asarray(params, dtype=float)
         start = time.perf_counter()
-        result = self.square.newton(w0, params, self.options.tolerance)
+        result = self.square.newton(w0, params, self.options.tolerance, lu=lu)
         self.solve_count += 1
         status = {"converged": result.converged, "status": "Newton",
                   "message": result.message, "max_residual": result.residual,

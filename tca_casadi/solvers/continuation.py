@@ -49,10 +49,11 @@ class BranchFollower:
     def params_at(self, lam):
         return self.P0 + lam * self.delta
 
-    def point(self, lam, solution, w=None, tangent=None):
-        """A :class:`BranchPoint` with the linearisation at ``(w, P(lam))``."""
+    def point(self, lam, solution, w=None, tangent=None, linearisation=None):
+        """A :class:`BranchPoint` with the linearisation at ``(w, P(lam))`` (``linearisation``:
+        one already computed there)."""
         w = solution.raw["w"] if w is None else np.asarray(w, float)
-        linear = self.solver.linearise(w, self.params_at(lam))
+        linear = linearisation or self.solver.linearise(w, self.params_at(lam))
         try:
             sign = linear.determinant_sign()
             rate = linear.state_derivative(self.delta) if tangent is None else tangent[:-1]
@@ -69,7 +70,8 @@ class BranchFollower:
         """Newton from the tangent predictor at ``lam`` (IPOPT, warm-started, if Newton fails
         on a small step)."""
         predicted = current.w + (lam - current.lam) * current.w_rate
-        trial = self.solver.solve_newton(self.params_at(lam), predicted)
+        lu = current.linearisation.lu if current.linearisation is not None else None
+        trial = self.solver.solve_newton(self.params_at(lam), predicted, lu=lu)
         if not trial.converged and lam - current.lam <= self.IPOPT_STEP + 1e-12:
             trial = self.solver.solve_ipopt(self.params_at(lam), current.solution)
         self.iterations += trial.iterations

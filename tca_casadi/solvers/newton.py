@@ -16,6 +16,10 @@ import scipy.sparse.linalg as spla
 from .linearisation import Linearisation
 
 
+#: a chord step (the factorised Jacobian of an earlier point) is kept if it cuts |g|_2 this much
+CHORD_CONTRACTION = 0.1
+
+
 @dataclass
 class NewtonResult:
     w: np.ndarray
@@ -50,29 +54,30 @@ class SquareSystem:
 
     def __init__(self, nlp, residual, jacobian):
         self.nlp = nlp
+        self._residual_function = residual
         self._with_jacobian = _Buffered(jacobian)
         self._residual = _Buffered(residual)
-        sparsity = jacobian.sparsity_out(1)
-        colind, row = sparsity.get_ccs()
-        self._indptr, self._indices = np.array(colind), np.array(row)
-        self.shape = (sparsity.size1(), sparsity.size2())
+        self._jacobian_pattern = _Pattern(jacobian.sparsity_out(1))
+        self.shape = self._jacobian_pattern.shape
         self._sensitivity = None
 
     def evaluate(self, w, P):
         """``(g, J_w)``: copies of the residual (n,) and the Jacobian (CSC)."""
         g, J = self._with_jacobian(w, P)
-        return g.copy(), sp.csc_matrix((J.copy(), self._indices, self._indptr), shape=self.shape)
+        return g.copy(), self._jacobian_pattern.matrix(J)
 
     def residual(self, w, P):
         """A copy of ``g(w, P)`` (n,)."""
         return self._residual(w, P)[0].copy()
 
-    def newton(self, w0, P, tolerance, max_iterations=25):
+    def newton(self, w0, P, tolerance, max_iterations=25, lu=None):
         """Newton from ``w0`` until ``max |g| <= tolerance``. The factorised Jacobian is kept while
-        steps contract the residual by at least half (a chord step costs one residual evaluation
-        and two triangular solves); otherwise it is refreshed and the full Newton step is
-        backtracked on ``|g|_2``."""
-        w, lu, fresh = np.array(w0, float), None, False
+        steps contract the residual tenfold (a chord step costs one residual evaluation and two
+        triangular solves; a weaker contraction means a long linear tail, so the Jacobian is
+        refreshed instead) and the full Newton step is backtracked on ``|g|_2``. ``lu``: a
+        factorised Jacobian from a nearby point to start the chord steps with (e.g. the
+        linearisation of the previous point of a path)."""
+        w, fresh = np.array(w0, float), False
         g = self.residual(w, P)
         for iteration in range(max_iterations + 1):
             residual = float(np.max(np.abs(g))) if g.size else 0.0
@@ -85,7 +90,7 @@ class SquareSystem:
             if lu is not None and not fresh:
                 trial = w - lu.solve(g)
                 g_trial = self.residual(trial, P)
-                if np.all(np.isfinite(g_trial)) and np.linalg.norm(g_trial) <= 0.5 * np.linalg.norm(g):
+                if np.all(np.isfinite(g_trial)) and np.linalg.norm(g_trial) <= CHORD_CONTRACTION * np.linalg.norm(g):
                     w, g = trial, g_trial
                     continue
             try:
@@ -112,21 +117,38 @@ class SquareSystem:
 
     # ------------------------------------------------------------------ sensitivities
     def _sensitivity_function(self):
-        if self._sensitivity is None:
+        if self._sensitivity is None:          # on the expanded (SX) residual: cheap to differentiate
             nlp = self.nlp
-            tip = nlp.outputs(nlp.w, nlp.P)[1][0:3, -1]
-            self._sensitivity = ca.Function(
-                "sensitivity", [nlp.w, nlp.P],
-                [ca.jacobian(nlp.problem["g"], nlp.P), ca.jacobian(tip, nlp.w),
-                 ca.jacobian(tip, nlp.P)]).expand()
+            w, P = ca.SX.sym("w", nlp.w.numel()), ca.SX.sym("P", nlp.P.numel())
+            g = self._residual_function(w, P)
+            tip = nlp.outputs.expand()(w, P)[1][0:3, -1]
+            function = ca.Function("sensitivity", [w, P], [ca.jacobian(g, P), ca.jacobian(tip, w), ca.jacobian(tip, P)])
+            self._sensitivity = (_Buffered(function), [_Pattern(function.sparsity_out(k)) for k in range(3)])
         return self._sensitivity
+
+    def _sensitivities(self, w, P):
+        """``(dg/dP, dtip/dw, dtip/dP)`` as scipy sparse matrices (CSC)."""
+        function, patterns = self._sensitivity_function()
+        return [pattern.matrix(values) for pattern, values in zip(patterns, function(w, P))]
 
     def parameter_jacobian(self, w, P):
         """``dg/dP`` (sparse, (n, nP)) at ``(w, P)``."""
-        return self._sensitivity_function()(w, P)[0].sparse()
+        return self._sensitivities(w, P)[0]
 
     def linearise(self, w, P):
         """:class:`Linearisation` at ``(w, P)``: adds ``dg/dP`` and the tip's derivatives."""
         g, J_w = self.evaluate(w, P)
-        J_P, T_w, T_P = self._sensitivity_function()(w, P)
-        return Linearisation(g, J_w, J_P.sparse(), T_w.sparse(), np.array(T_P))
+        J_P, T_w, T_P = self._sensitivities(w, P)
+        return Linearisation(g, J_w, J_P, T_w, T_P.toarray())
+
+
+class _Pattern:
+    """A CasADi sparsity pattern, to wrap a buffer of nonzeros as a scipy CSC matrix."""
+
+    def __init__(self, sparsity):
+        colind, row = sparsity.get_ccs()
+        self.indptr, self.indices = np.array(colind), np.array(row)
+        self.shape = (sparsity.size1(), sparsity.size2())
+
+    def matrix(self, values):
+        return sp.csc_matrix((values.copy(), self.indices, self.indptr), shape=self.shape)

@@ -44,6 +44,8 @@ OUTPUT_POINTS = 9
 GAUSS_POINTS = 8
 #: right-hand-side evaluations allowed per segment before a shot is abandoned
 RHS_BUDGET = 20000
+#: the smallest scaled residual shooting accepts: what DOP853 at rtol 1e-11 delivers
+TOLERANCE_FLOOR = 1e-9
 
 
 class _ShotFailed(Exception):
@@ -134,7 +136,7 @@ class ShootingSolver:
         tolerance = self.tolerance
         converged = bool(worst <= tolerance)
         message = (f"scipy root (hybr, {self.jacobian} Jacobian): {result.message.strip()}; max scaled residual "
-                   f"{worst:.2e} (tolerance {tolerance:.0e}), {shots[0]} shots")
+                   f"{worst:.2e} ({self._tolerance_text()}), {shots[0]} shots")
         status = {"converged": converged, "status": "success" if converged else "failure",
                   "message": message, "method": self.method, "max_residual": worst,
                   "iterations": int(result.nfev), "solve_time_s": elapsed,
@@ -165,8 +167,15 @@ class ShootingSolver:
     @property
     def tolerance(self):
         """Accepted scaled residual: the scenario's tolerance, floored by what the integrator's
-        tolerances can deliver."""
-        return max(self.options.tolerance, 1e-9)
+        tolerances can deliver (:data:`TOLERANCE_FLOOR`; the solution says so when it applies)."""
+        return max(self.options.tolerance, TOLERANCE_FLOOR)
+
+    def _tolerance_text(self):
+        """The accepted tolerance as the message states it, saying when the floor applied."""
+        if self.options.tolerance >= TOLERANCE_FLOOR:
+            return f"tolerance {self.tolerance:.0e}"
+        return (f"tolerance {self.tolerance:.0e}: solver.tolerance {self.options.tolerance:.0e} raised to "
+                f"what integration at rtol {self.rtol:.0e} delivers")
 
     # ------------------------------------------------------------------ one shot
     def _shot(self, z, scale, params, derivatives):

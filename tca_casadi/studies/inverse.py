@@ -12,9 +12,16 @@ default)::
 tolerance costs 1), ``t`` the point's tangent (``R e_z``), ``d*`` a target direction and ``R*``
 a target orientation (each term only when asked; both are ``1 - cos(angle)``). The last term,
 least total heating (``eps`` = ``regularisation``, default 1e-3), picks one answer where several
-reach the target; it moves a reachable answer by about ``eps e_p^2 / |dp/dtau|``, nanometres. IPOPT solves it with exact
-first and second derivatives from CasADi; the NLP is built once and the target, weights and all
-other parameters (loads, gravity, ...) are NLP parameters.
+reach the target; it moves a reachable answer by about ``eps e_p^2 / |dp/dtau|``, nanometres.
+
+Two methods minimise it. ``reduced`` (the default): least squares over the temperatures only,
+every iterate an equilibrium (:mod:`.inverse_reduced`). ``ipopt``: the full-space NLP with the
+collocation constraints as equalities, exact first and second derivatives from CasADi (built on
+first use). Both are built once; the target, weights and all other parameters (loads,
+gravity, ...) are NLP parameters. The reduced method is the default because it is the faster on
+every shipped robot (``scripts/bench.py``: the bending module about 40 ms against 50 ms per cold
+query, the refined arm about 0.4 s against minutes: IPOPT's exact-Hessian iterations on 4272
+unknowns need repeated factorisations for inertia correction).
 """
 import logging
 import time
@@ -45,7 +52,7 @@ class InverseStatics:
     """
 
     def __init__(self, sim, vary=None, bounds=None, tolerance=1e-4, angle_tolerance=np.radians(1.0),
-                 regularisation=1e-3, orientation_weight=1.0, starts=4, method="ipopt"):
+                 regularisation=1e-3, orientation_weight=1.0, starts=4, method="reduced"):
         if method not in ("ipopt", "reduced"):
             raise ScenarioError(f"unknown inverse method {method!r}; available: ipopt, reduced")
         self.method = method
@@ -65,6 +72,7 @@ class InverseStatics:
             raise ScenarioError(f"starts (--starts) must be at least 1, got {starts}")
         self.starts = int(starts)
         self._forward_cache = {}
+        self._start_linearisation = None
         self.length = sum(m.length for m in self.robot.modules)
         started = time.perf_counter()
         self._build()
@@ -142,16 +150,9 @@ class InverseStatics:
                      + w_direction * (1 - ca.dot(R[:, 2], direction)) / angle_scale
                      + w_rotation * (3 - ca.trace(R_target.T @ R)) / 2 / angle_scale
                      + self.regularisation * ca.sumsqr(tau))
-        constraints = ca.Function("g", [nlp.w, nlp.P], [nlp.problem["g"]])(nlp.w, P)
-        problem = {"x": ca.vertcat(nlp.w, tau), "p": ca.vertcat(fixed, target),
-                   "f": objective, "g": constraints}
-        # the start is an equilibrium (feasible) with tau inside the box: a small initial barrier
-        options = {"print_level": 0, "sb": "yes", "tol": 1e-8, "mu_init": 1e-6,
-                   "constr_viol_tol": self.sim.scenario.solver.tolerance, "max_iter": 300,
-                   "nlp_scaling_method": "none", "bound_relax_factor": 0.0}
-        self._ipopt = ca.nlpsol("inverse", "ipopt", problem,
-                                {"ipopt": options, "print_time": False, "error_on_fail": False,
-                                 "expand": True})
+        self._problem = {"x": ca.vertcat(nlp.w, tau), "p": ca.vertcat(fixed, target), "f": objective,
+                         "g": ca.Function("g", [nlp.w, nlp.P], [nlp.problem["g"]])(nlp.w, P)}
+        self._ipopt_instance = None
         self._pose = ca.Function("pose", [nlp.w, tau, fixed, target], [state[0:3], R]).expand()
         self._n_w = nlp.w.numel()
         # the same objective as a sum of squares, for the reduced-space method
@@ -164,6 +165,19 @@ class InverseStatics:
                                        ca.jacobian(residuals, tau)]).expand()
         self._dP_dtau = np.column_stack([p.vector(robot.layout.size) * (hi - lo)
                                          for p, (lo, hi) in zip(self.parameters, self.bounds)])
+
+    @property
+    def _ipopt(self):
+        """IPOPT on the full-space problem, built on first use (``method="ipopt"``): the start is
+        an equilibrium (feasible) with tau inside the box, so a small initial barrier."""
+        if self._ipopt_instance is None:
+            options = {"print_level": 0, "sb": "yes", "tol": 1e-8, "mu_init": 1e-6,
+                       "constr_viol_tol": self.sim.scenario.solver.tolerance, "max_iter": 300,
+                       "nlp_scaling_method": "none", "bound_relax_factor": 0.0}
+            self._ipopt_instance = ca.nlpsol("inverse", "ipopt", self._problem,
+                                             {"ipopt": options, "print_time": False, "error_on_fail": False,
+                                              "expand": True})
+        return self._ipopt_instance
 
     def _target_vector(self, target):
         names = [m.name for m in self.robot.modules]
@@ -298,21 +312,22 @@ class InverseStatics:
         temperatures = {p.path: float(v) for p, v in zip(self.parameters, self.values(best["tau"]))}
         forward, difference = self._verify(best, target)
         reachable = self._reached(best)
+        solver = "IPOPT" if self.method == "ipopt" else "least squares"
         if not best["equilibrium"]:
-            message = f"IPOPT did not converge ({best['status']}, constraint residual {best['residual']:.1e})"
+            message = f"{solver} did not converge ({best['status']}, constraint residual {best['residual']:.1e})"
         elif reachable:
-            message = "target reached" + ("" if best["converged"] else f" (IPOPT: {best['status']})")
+            message = "target reached" + ("" if best["converged"] else f" ({solver}: {best['status']})")
         elif not best["converged"]:
             message = (f"no start reached the target; the closest pose found, "
                        f"{best['position_error'] * 1e3:.4g} mm away, is not proven optimal "
-                       f"(IPOPT: {best['status']})")
+                       f"({solver}: {best['status']})")
         else:
             message = (f"target unreachable within the bounds: the closest pose found is "
                        f"{best['position_error'] * 1e3:.4g} mm away")
         return InverseResult(target, temperatures, best["position"], best["R"], best["position_error"],
                              best["angle_error"], reachable, best["converged"], best["objective"],
                              forward, difference, elapsed, iterations, tried, message,
-                             best["w"], best["tau"])
+                             best["w"], best["tau"], self.method)
 
     def _verify(self, best, target):
         """Independent forward solve at the answer's temperatures: predictor-corrector
@@ -323,7 +338,10 @@ class InverseStatics:
         forward = None
         if start.converged:
             follower = BranchFollower(self.solver, start.parameters, params - start.parameters)
-            point, _, _, failure = follower.advance(follower.point(0.0, start), 1.0, 0.5, 0.5, 1e-3)
+            if self._start_linearisation is None:      # the same start for every query
+                self._start_linearisation = self.solver.linearise(start.raw["w"], start.parameters)
+            first = follower.point(0.0, start, linearisation=self._start_linearisation)
+            point, _, _, failure = follower.advance(first, 1.0, 1.0, 1.0, 1e-3)
             forward = None if failure is not None else point.solution
         if forward is None:
             forward = self.sim.solve_at(params, method="collocation")

@@ -19,6 +19,7 @@ class _Equilibria:
     def __init__(self, inverse, w0, tau0):
         self.inverse, self.solver = inverse, inverse.solver
         self.tau, self.w, self.rate = np.array(tau0, float), np.asarray(w0, float), None
+        self.lu = None            # the factorised Jacobian at the last linearised point
         self.failed = False
 
     def __call__(self, tau):
@@ -27,7 +28,8 @@ class _Equilibria:
             return self.w
         params = self.inverse.params_at(tau)
         predicted = self.w if self.rate is None else self.w + self.rate @ (tau - self.tau)
-        newton = self.solver.square.newton(predicted, params, self.inverse.sim.scenario.solver.tolerance)
+        newton = self.solver.square.newton(predicted, params, self.inverse.sim.scenario.solver.tolerance,
+                                           lu=self.lu)
         w = newton.w if newton.converged else self._continue(params)
         if w is not None:
             self.tau, self.w, self.rate = tau.copy(), w, None
@@ -64,7 +66,7 @@ def reduced_attempt(inverse, w0, tau0, vector):
             return np.zeros((size, len(tau)))
         linear = inverse.solver.linearise(w, inverse.params_at(tau))
         rate = linear.state_derivative(inverse._dP_dtau)                  # (n, k)
-        equilibria.rate = rate
+        equilibria.rate, equilibria.lu = rate, linear.lu
         _, r_w, r_tau = inverse._residuals(w, tau, fixed, vector)
         return r_w.sparse() @ rate + np.array(r_tau)
 

@@ -6,6 +6,9 @@ from typing import Optional
 import numpy as np
 
 from ..text import signed
+
+#: what an iteration is, per method
+ITERATIONS = {"reduced": "least-squares iterations", "ipopt": "IPOPT iterations"}
 from .targets import Target
 
 
@@ -29,6 +32,7 @@ class InverseResult:
     message: str
     w: np.ndarray = field(repr=False, default=None)
     tau: np.ndarray = field(repr=False, default=None)
+    method: str = "reduced"            # 'reduced' (least squares) or 'ipopt' (full space)
 
     @property
     def verified(self):
@@ -47,7 +51,7 @@ class InverseResult:
                 "verification_difference": float(self.verification_difference),
                 "verified": bool(self.verified), "objective": float(self.objective),
                 "solve_time_s": float(self.solve_time_s), "iterations": int(self.iterations),
-                "starts": int(self.starts)}
+                "starts": int(self.starts), "method": self.method}
 
     def save(self, directory, plot=True):
         """Write ``inverse.json``, the forward ``solution.json`` + ``arrays.npz`` and, with
@@ -77,7 +81,7 @@ class InverseResult:
                  + ("" if self.angle_error is None else f", angle error {np.degrees(self.angle_error):.4g} deg"),
                  f"  forward check: {self.verification_difference:.2e} m "
                  f"({'verified' if self.verified else 'NOT VERIFIED'})",
-                 f"  {self.solve_time_s * 1e3:.0f} ms, {self.iterations} IPOPT iterations, {self.starts} start(s)"]
+                 f"  {self.solve_time_s * 1e3:.0f} ms, {self.iterations} {ITERATIONS[self.method]}, {self.starts} start(s)"]
         lines += [f"  {path:<28}{value:9.3f} degC" for path, value in self.temperatures.items()]
         return "\n".join(lines)
 

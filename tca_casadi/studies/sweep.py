@@ -18,7 +18,7 @@ implicit function theorem on CasADi's exact Jacobians: ``dtip/dv = T_w (-J_w^-1 
 """
 import logging
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -43,6 +43,8 @@ class SweepPoint:
     det_sign: int
     sigma_min: float
     substeps: int = 1
+    #: the point's linearisation, kept on the newest point only (its LU starts the next step)
+    linearisation: object = field(default=None, repr=False)
 
 
 class Sweep:
@@ -127,7 +129,7 @@ class Sweep:
             det_sign, sigma = 0, 0.0
         return SweepPoint(lam, self.values_at(lam), branch_point.solution, branch_point.w,
                           branch_point.w_rate, branch_point.lam_rate, tip_derivative, det_sign,
-                          sigma, substeps)
+                          sigma, substeps, branch_point.linearisation)
 
     # ------------------------------------------------------------------ natural continuation
     def _natural(self, points, progress):
@@ -138,6 +140,7 @@ class Sweep:
                 current, index * spacing, h, spacing, self.min_step)
             if failure is not None:                 # current is the last accepted point
                 return False, self._stalled(points[0], points[-1], failure)
+            points[-1].linearisation = None         # only the newest point keeps its LU
             points.append(self._record(current, substeps))
             _report(progress, points[-1], self)
         return True, f"completed {self.steps} steps"
