@@ -139,7 +139,14 @@ def _validate(args):
           f"{len(robot.tcas)} TCA(s), {len(robot.actuators) - len(robot.tcas)} tendon(s), "
           f"{len(scenario.loads)} load(s), {len(scenario.objects)} object(s); tip: "
           f"{robot.modules[robot.tip_index].name}")
-    print("parameters (changeable without rebuilding): " + ", ".join(robot.layout.names()))
+    import numpy as np
+    names = robot.layout.names()
+    print(f"parameters ({len(names)}: --set or sweep them without rebuilding the model):")
+    from .units import UNIT_OF
+    for name in names:
+        value = np.atleast_1d(robot.values[robot.layout[name]])
+        text = f"{value[0]:.6g}" if value.size == 1 else "[" + ", ".join(f"{v:.6g}" for v in value) + "]"
+        print(f"  {name:<44} {text} {UNIT_OF[robot.layout.kind(name)]}")
     return 0
 
 

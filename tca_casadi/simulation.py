@@ -111,7 +111,7 @@ class Simulation:
             solution = solver.solve(self.params, initial)
             if continuation == "auto" and _needs_continuation(solution):
                 solution = _better(solution, self.continue_from_rest(solver))
-        if initial is None and solution.converged and getattr(solver, "higher", None) is not None:
+        if initial is None and solution.converged and solver.estimates_error:
             solver, solution, _ = accuracy.control(solver, solution, self.params, refine)
             self._solvers[method or self.method] = solver
         self.last = solution
@@ -136,7 +136,7 @@ class Simulation:
         solution = solver.solve(rest)
         if not solution.converged:
             return solution
-        if hasattr(solver, "square"):
+        if solver.has_square_system:
             solution, lam, steps, iterations = _follow_branch(solver, rest, target, solution,
                                                               first_step, min_step)
         else:

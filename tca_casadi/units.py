@@ -30,8 +30,17 @@ KINDS = {
     "compliance": ("1/N", "a compliance (strain per newton)"),
     "pressure_per_force2": ("Pa/N^2", "a modulus per force squared"),
     "dimensionless": ("", "a plain number"),
-    "coefficient": ("", "a fit coefficient (a plain number in SI units)"),
+    "untwist_c2": ("", "an untwist coefficient in rad/(m degC^2) (a plain number)"),
+    "untwist_c1": ("", "an untwist coefficient in rad/(m degC) (a plain number)"),
+    "untwist_c0": ("", "an untwist coefficient in rad/m (a plain number)"),
 }
+
+#: unit kind -> the unit written in labels and CSV headers
+UNIT_OF = {"temperature": "degC", "force": "N", "moment": "N m", "mass": "kg", "acceleration": "m/s^2",
+           "length": "m", "angle": "rad", "pressure": "Pa", "density": "kg/m^3", "force_per_length": "N/m",
+           "moment_per_length": "N m/m", "pressure_per_force": "Pa/N", "pressure_per_force2": "Pa/N^2",
+           "untwist_c2": "rad/(m degC^2)", "untwist_c1": "rad/(m degC)", "untwist_c0": "rad/m",
+           "dimensionless": "-"}
 
 _NUMBER_AND_UNIT = re.compile(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*)", re.DOTALL)
 

@@ -172,7 +172,7 @@ def _material(put, name, material):
 #: a TCA type's parameters: key -> unit kind (``fiber_length`` only when the scenario gives it)
 TCA_KEYS = {"fiber_radius": "length", "coil_radius": "length", "pitch_angle": "angle",
             "fiber_length": "length", "reference_temperature": "temperature",
-            "untwist.c2": "coefficient", "untwist.c1": "coefficient", "untwist.c0": "coefficient",
+            "untwist.c2": "untwist_c2", "untwist.c1": "untwist_c1", "untwist.c0": "untwist_c0",
             "shear_modulus.a2": "pressure_per_force2", "shear_modulus.a1": "pressure_per_force",
             "shear_modulus.a0": "pressure"}
 

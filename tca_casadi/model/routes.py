@@ -175,6 +175,9 @@ def _length_grid(route):
                                   s_a, s_b))
     else:
         edges = np.linspace(s_a, s_b, 17 + int(np.ceil(8 * abs(route.params.get("turns", 0.0)))))
-    nodes, gauss = np.polynomial.legendre.leggauss(8)
+    nodes, gauss = _GAUSS_8
     half = np.diff(edges)[:, None] / 2
     return (edges[:-1, None] + (nodes + 1) * half).ravel(), (gauss * half).ravel()
+
+
+_GAUSS_8 = np.polynomial.legendre.leggauss(8)

@@ -17,6 +17,11 @@ log = logging.getLogger(__name__)
 class CollocationSolver:
     """Direct collocation + IPOPT. ``solve(params, initial=None)`` -> :class:`Solution`."""
     method = "collocation"
+    #: capabilities that :class:`Simulation` and the studies rely on (declared, not probed):
+    #: a square system with Newton and linearisations (continuation, sweeps, inverse statics),
+    #: and an error estimate against degree d + 1 (accuracy control)
+    has_square_system = True
+    estimates_error = True
 
     def __init__(self, robot, options, meshes=None, degree=None):
         start = time.perf_counter()
@@ -29,6 +34,7 @@ class CollocationSolver:
         self._jacobian = ca.Function("nlp_jac_g", [w, P], [g, ca.jacobian(g, w)])
         self._ipopt_instance = None      # IPOPT is built on first use (Newton needs only g and J)
         self._square = None
+        self._higher = None
         self.build_time_s = time.perf_counter() - start
         self.solve_count = 0
         log.info("built collocation NLP: %d variables in %.3f s", self.nlp.w.numel(), self.build_time_s)
@@ -93,7 +99,7 @@ class CollocationSolver:
     def higher(self):
         """The same NLP at degree d + 1 on the same meshes (built on first use): the reference of
         the error estimate (:mod:`tca_casadi.solvers.accuracy`)."""
-        if getattr(self, "_higher", None) is None:
+        if self._higher is None:
             self._higher = CollocationSolver(self.robot, self.options, self.nlp.meshes, self.degree + 1)
         return self._higher
 

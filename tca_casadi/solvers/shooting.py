@@ -55,6 +55,10 @@ class _ShotFailed(Exception):
 class ShootingSolver:
     """Single shooting with scipy. ``solve(params, initial=None)`` -> :class:`Solution`."""
     method = "shooting"
+    #: no square system (continuation is by warm-started solves) and no error estimate: the
+    #: integrator's tolerances set the accuracy
+    has_square_system = False
+    estimates_error = False
 
     def __init__(self, robot, options, rtol=1e-11, atol=1e-12, jacobian="variational"):
         start = time.perf_counter()

@@ -72,7 +72,7 @@ class InverseStatics:
             raise ScenarioError(f"starts (--starts) must be at least 1, got {starts}")
         self.starts = int(starts)
         self._forward_cache = {}
-        self._start_linearisation = None
+        self._start_linearisation = {}
         self.length = sum(m.length for m in self.robot.modules)
         started = time.perf_counter()
         self._build()
@@ -338,9 +338,10 @@ class InverseStatics:
         forward = None
         if start.converged:
             follower = BranchFollower(self.solver, start.parameters, params - start.parameters)
-            if self._start_linearisation is None:      # the same start for every query
-                self._start_linearisation = self.solver.linearise(start.raw["w"], start.parameters)
-            first = follower.point(0.0, start, linearisation=self._start_linearisation)
+            key = start.parameters.tobytes()           # the same start for every query
+            if key not in self._start_linearisation:
+                self._start_linearisation = {key: self.solver.linearise(start.raw["w"], start.parameters)}
+            first = follower.point(0.0, start, linearisation=self._start_linearisation[key])
             point, _, _, failure = follower.advance(first, 1.0, 1.0, 1.0, 1e-3)
             forward = None if failure is not None else point.solution
         if forward is None:

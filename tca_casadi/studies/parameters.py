@@ -21,13 +21,8 @@ import numpy as np
 
 from ..errors import ScenarioError
 from ..scenario.checks import closest
-from ..units import to_si
+from ..units import UNIT_OF, to_si
 
-#: unit kind -> the unit written in labels and CSV headers
-UNIT_OF = {"temperature": "degC", "force": "N", "moment": "N m", "mass": "kg", "acceleration": "m/s^2",
-           "length": "m", "angle": "rad", "pressure": "Pa", "density": "kg/m^3", "force_per_length": "N/m",
-           "moment_per_length": "N m/m", "pressure_per_force": "Pa/N", "pressure_per_force2": "Pa/N^2",
-           "coefficient": "SI", "dimensionless": "-"}
 COMPONENTS = {"x": 0, "y": 1, "z": 2, "[0]": 0, "[1]": 1, "[2]": 2, "[3]": 3}
 
 

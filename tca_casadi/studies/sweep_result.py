@@ -137,6 +137,7 @@ def find_events(robot, points, parameters):
                        "values": {p.path: float(v) for p, v in zip(parameters, values)},
                        "message": f"{text} near {where}"})
 
+    at = {id(p): robot.at(p.solution.parameters) for p in points}     # laws at each point's parameters
     for index, (a, b) in enumerate(zip(points[:-1], points[1:])):
         def between(fraction, a=a, b=b):
             return a.lam + fraction * (b.lam - a.lam)
@@ -151,7 +152,8 @@ def find_events(robot, points, parameters):
             if not actuator.tension_only and (fa * fb < 0 or (fa != 0 and fb == 0)):
                 event("tension_sign", between(fa / (fa - fb)),
                       f"{actuator.key} tension changes sign ({fa * 1e3:.4g} -> {fb * 1e3:.4g} mN)")
-            la, lb = (actuator.law_of(robot.param_function(p.solution.parameters)).monotone_limit for p in (a, b))
+            k = robot.actuators.index(actuator)
+            la, lb = (at[id(p)].actuators[k].law.monotone_limit for p in (a, b))
             if (fa - la) * (fb - lb) < 0:
                 limit = 0.5 * (la + lb)
                 event("fit_range", between((fa - la) / ((fa - la) - (fb - lb))),
