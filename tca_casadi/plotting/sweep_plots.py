@@ -35,6 +35,7 @@ def plot_sweep(result, path):
     bottom.axhline(0.0, color="grey", linewidth=0.8)
     bottom.set_ylabel("tension [mN]")
     bottom.set_xlabel(parameter.label + ("" if len(result.parameters) == 1 else " (and the others with it)"))
+    bottom.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4))   # moduli in Pa: 1e5, not 100000
     for event in result.events:
         for ax in (top, bottom):
             ax.axvline(event["values"][parameter.path], color="tab:red", linestyle=":", linewidth=1)
