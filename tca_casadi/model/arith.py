@@ -1,8 +1,6 @@
 """Arithmetic that works on numbers, numpy arrays and CasADi symbols alike, so that each piece
 of physics is written once and evaluated symbolically (inside an NLP) or numerically (in
 post-processing) from the same code."""
-import math
-
 import numpy as np
 
 
@@ -28,22 +26,11 @@ def sqrt(x):
     return _casadi().sqrt(x) if is_casadi(x) else np.sqrt(x)
 
 
-def exp(x):
-    return _casadi().exp(x) if is_casadi(x) else np.exp(x)
-
-
 def vector(*items):
     """Column of the scalars ``items``: a CasADi column if any is symbolic, else a numpy array."""
     if any(is_casadi(item) for item in items):
         return _casadi().vertcat(*items)
     return np.array([float(item) for item in items])
-
-
-def scalar(value):
-    """A number as a float; a CasADi expression unchanged (first entry of a length-1 vector)."""
-    if is_casadi(value):
-        return value[0] if value.numel() > 1 else value
-    return float(np.ravel(value)[0])
 
 
 def placement_matrix(radius, angle):
@@ -62,4 +49,4 @@ def matmul(matrix, data):
     return matrix @ data
 
 
-__all__ = ["is_casadi", "cos", "sin", "sqrt", "exp", "vector", "scalar", "placement_matrix", "matmul", "math"]
+__all__ = ["is_casadi", "cos", "sin", "sqrt", "vector", "placement_matrix", "matmul"]

@@ -15,9 +15,8 @@ the taut condition by about ``eps^2 F_s / (2 F)``, far below the solver toleranc
 """
 from dataclasses import dataclass
 
-import numpy as np
 
-from .arith import is_casadi
+from .arith import sqrt
 
 SMOOTHING = 1e-9
 
@@ -41,13 +40,6 @@ class TendonLaw:
         return -self.residual(stroke, force, displacement)
 
 
-def _sqrt(value):
-    if is_casadi(value):
-        import casadi as ca
-        return ca.sqrt(value)
-    return np.sqrt(value)
-
-
 def compatibility(actuator, law, stroke, force, parameter, force_scale):
     """The scaled length condition of an actuator with unknown tension (see module docstring);
     ``law`` is its law at the current parameters (scaled by the nominal law's size)."""
@@ -55,7 +47,7 @@ def compatibility(actuator, law, stroke, force, parameter, force_scale):
     if not actuator.tension_only:
         return scaled
     f, s = force / force_scale, -scaled
-    return f + s - _sqrt(f * f + s * s + SMOOTHING**2)
+    return f + s - sqrt(f * f + s * s + SMOOTHING**2)
 
 
 def compatibility_residuals(robot, lengths, tension, param):

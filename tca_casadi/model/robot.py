@@ -18,11 +18,10 @@ from typing import Optional
 import numpy as np
 
 from ..scenario.checks import fail, route_span
-from .arith import vector
 from .compatibility import TendonLaw
 from .parameters import ParameterLayout, declare  # noqa: F401  (ParameterLayout: re-exported)
 from .routes import ANGLE_KEY, make_route, reference_path_length
-from .sections import outline_contains, section_properties, stiffness_diagonal
+from .sections import outside_point, section_properties, stiffness_diagonal
 from .tca_law import TcaLaw
 
 
@@ -142,10 +141,7 @@ class ModuleModel:
 
     def stiffness_of(self, param):
         """(6,) diagonal of K at the parameters: ``[E Ix, E Iy, G J, G A, G A, E A]``."""
-        youngs, shear = self.moduli_of(param)
-        p = self.properties
-        return vector(youngs * p.ix, youngs * p.iy, shear * p.torsion, shear * p.area, shear * p.area,
-                      youngs * p.area)
+        return stiffness_diagonal(self.properties, *self.moduli_of(param))
 
     def weight_density_of(self, param):
         """``rho A`` [kg/m] at the parameters."""
@@ -309,10 +305,8 @@ class Robot:
                 if radius < 0 or (radius == 0 and actuator.route.kind == "helix"):
                     out.append(f"{actuator.key}: route radius {radius:g} m must be positive")
                     continue
-            module = self.modules[actuator.module]
-            outline = module.section.envelope or module.section
-            points = actuator.route.moved(*actuator.placement_of(param)).samples(400)
-            if not np.all(outline_contains(outline, points[0], points[1])):
+            section = self.modules[actuator.module].section
+            if outside_point(section.envelope or section, actuator.route.moved(*actuator.placement_of(param))) is not None:
                 out.append(f"{actuator.key}: the route passes outside the body")
         return out
 
@@ -358,10 +352,8 @@ def _actuator(scenario, index, config, a_index, a_config):
 
 def _check_inside(scenario, index, config, a_index, route):
     outline = config.cross_section.envelope or config.cross_section
-    points = route.samples(400)
-    inside = outline_contains(outline, points[0], points[1])
-    if not np.all(inside):
-        worst = points[:, np.argmin(inside)]
+    worst = outside_point(outline, route)
+    if worst is not None:
         size = (f"radius {outline.diameter * 500:g} mm" if outline.shape == "circle"
                 else f"{outline.width * 1e3:g} x {outline.height * 1e3:g} mm")
         hint = "" if config.cross_section.envelope else (

@@ -4,6 +4,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .arith import vector
+
 
 @dataclass(frozen=True)
 class SectionProperties:
@@ -35,9 +37,18 @@ def saint_venant_rectangle(width, height, terms=50):
 
 
 def stiffness_diagonal(props, youngs, shear):
-    """Diagonal of ``K``: ``[E Ix, E Iy, G J, G A, G A, E A]`` (N m^2 and N)."""
-    return np.array([youngs * props.ix, youngs * props.iy, shear * props.torsion,
-                     shear * props.area, shear * props.area, youngs * props.area])
+    """Diagonal of ``K``: ``[E Ix, E Iy, G J, G A, G A, E A]`` (N m^2 and N); the moduli may be
+    numbers (a numpy array) or CasADi symbols (a CasADi column)."""
+    return vector(youngs * props.ix, youngs * props.iy, shear * props.torsion,
+                  shear * props.area, shear * props.area, youngs * props.area)
+
+
+def outside_point(outline, route, count=400):
+    """The body-frame point (3,) of ``route`` farthest outside ``outline`` (``count`` samples),
+    or None when the route lies inside (or on) it."""
+    points = route.samples(count)
+    inside = outline_contains(outline, points[0], points[1])
+    return None if np.all(inside) else points[:, np.argmin(inside)]
 
 
 def outline_contains(outline, x, y, slack=1e-12):
