@@ -156,7 +156,7 @@ def _solve(args):
     output = prepare_directory(args.output or default_directory(sim.scenario.name),
                                ["solution.json", "arrays.npz", "robot.png"],
                                stale=["robot.png"] if args.no_plot else [])
-    solution = sim.solve()
+    solution = sim.solve(warn=False)          # its warnings are in the summary and solution.json
     json_path, npz_path = solution.save(output)
     written = [json_path, npz_path]
     if not args.no_plot:

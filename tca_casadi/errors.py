@@ -28,7 +28,37 @@ class SolverError(TcaError):
 
 
 class PhysicsWarning(UserWarning):
-    """A converged result that leaves the model's range (compression, fit range, slack)."""
+    """Something a result's user must know: it did not converge, or it leaves the model's range
+    (compression, fit range, slack), or its accuracy or balance is not what was asked, or a
+    tolerance was floored. Recorded in ``Solution.warnings`` (``str(w)`` is the text, ``w.kind``
+    one of :data:`WARNING_KINDS`) and issued by :meth:`Simulation.solve` and ``check``."""
+
+    def __init__(self, kind, message):
+        if kind not in WARNING_KINDS:
+            raise ValueError(f"unknown warning kind {kind!r}")
+        super().__init__(message)
+        self.kind = kind
+        self.message = message
+
+    def __str__(self):
+        return self.message
+
+    def __repr__(self):
+        return f"PhysicsWarning({self.kind!r}, {self.message!r})"
+
+    def __eq__(self, other):
+        return isinstance(other, PhysicsWarning) and (self.kind, self.message) == (other.kind, other.message)
+
+    def __hash__(self):
+        return hash((self.kind, self.message))
+
+    def as_dict(self):
+        return {"kind": self.kind, "message": self.message}
+
+
+#: the kinds of :class:`PhysicsWarning`
+WARNING_KINDS = ("not_converged", "compression", "fit_range", "slack", "global_balance", "accuracy",
+                 "mesh_limit", "tolerance_floor", "grasp", "sequence")
 
 
 class OutputError(ScenarioError):

@@ -7,9 +7,9 @@
 """
 import logging
 import time
+import warnings
 
 import numpy as np
-
 
 from .errors import ScenarioError
 from .model import Robot
@@ -19,6 +19,7 @@ from .scenario.overrides import apply_overrides
 from .solvers import CollocationSolver, ShootingSolver
 from .solvers import accuracy
 from .solvers.continuation import BranchFollower
+from .status import SolveStatus, Status
 
 log = logging.getLogger(__name__)
 
@@ -87,7 +88,7 @@ class Simulation:
             self._solvers[method] = SOLVERS[method](self.robot, self.scenario.solver)
         return self._solvers[method]
 
-    def solve(self, warm_start=None, method=None, continuation=None, refine=True):
+    def solve(self, warm_start=None, method=None, continuation=None, refine=True, warn=True):
         """Equilibrium at the current parameters.
 
         ``warm_start``: a previous Solution, or ``"last"``. ``continuation`` (default from the
@@ -99,6 +100,10 @@ class Simulation:
         ``refine`` and ``solver.refine: auto`` the mesh is refined where the error is until the
         tip and tensions meet ``solver.tip_tolerance`` / ``tension_tolerance``, and the refined
         solver is kept for later solves (sweeps, inverse statics).
+
+        The solution's :class:`~tca_casadi.errors.PhysicsWarning` s (non-convergence,
+        compression, slack, accuracy, ...) are recorded in ``solution.warnings`` and, with
+        ``warn``, also issued with :func:`warnings.warn` (studies pass ``warn=False``).
         """
         solver = self.solver(method)
         continuation = continuation or self.scenario.solver.continuation
@@ -115,6 +120,9 @@ class Simulation:
             solver, solution, _ = accuracy.control(solver, solution, self.params, refine)
             self._solvers[method or self.method] = solver
         self.last = solution
+        if warn:
+            for warning in solution.warnings:
+                warnings.warn(warning, stacklevel=2)
         return solution
 
     def solve_at(self, params, method=None):
@@ -123,7 +131,7 @@ class Simulation:
         saved, last = self.params.copy(), self.last
         try:
             self.params = np.array(params, dtype=float)
-            return self.solve(method=method, refine=False)
+            return self.solve(method=method, refine=False, warn=False)
         finally:
             self.params, self.last = saved, last
 
@@ -136,39 +144,33 @@ class Simulation:
         solution = solver.solve(rest)
         if not solution.converged:
             return solution
-        if solver.has_square_system:
-            solution, lam, steps, iterations = _follow_branch(solver, rest, target, solution,
-                                                              first_step, min_step)
-        else:
-            solution, lam, steps, iterations = _warm_steps(solver, rest, target, solution,
-                                                           first_step, min_step)
+        follow = _follow_branch if solver.has_square_system else _warm_steps
+        solution, lam, steps, iterations, last_failure = follow(solver, rest, target, solution,
+                                                                first_step, min_step)
         if lam < 1.0:
-            solution = self._stalled(solver, solution, rest, target, lam, min_step)
-        else:
-            solution.message += f" (continuation from the reference state, {steps} steps)"
-        solution.solve_time_s = time.perf_counter() - started    # all steps included
-        solution.iterations = iterations
+            return self._stalled(solver, solution, rest, target, lam, min_step, last_failure,
+                                 iterations, time.perf_counter() - started)
+        note = f"continuation from the reference state, {steps} steps"
+        solution.result = solution.result.noted(note).replace(                # all steps included
+            solve_time_s=time.perf_counter() - started, nit=iterations)
         return solution
 
 
-    def _stalled(self, solver, reached, rest, target, lam, min_step):
+    def _stalled(self, solver, reached, rest, target, lam, min_step, last_failure, iterations, elapsed):
         """The unconverged result of a continuation that stopped at ``lam``: the state it reached,
         reported at the user's parameters (their values in the table, the residual there), with
-        how far it got and the parameter values reached."""
+        how far it got, the parameter values reached and what the last step did."""
         changed = [name for name in self.robot.layout.names()
                    if np.any(rest[self.robot.layout[name]] != target[self.robot.layout[name]])]
         reached_values = rest + lam * (target - rest)
         where = "; ".join(f"{name} {_format(reached_values[self.robot.layout[name]])} of "
                           f"{_format(target[self.robot.layout[name]])}" for name in changed[:6])
         more = f" and {len(changed) - 6} more" if len(changed) > 6 else ""
-        status = {"converged": False, "status": "continuation stalled", "iterations": reached.iterations,
-                  "solve_time_s": reached.solve_time_s, "max_residual": float("nan"), "message": ""}
-        result = solver.evaluate(reached.raw.get("w", reached.raw.get("z")), target, status)
-        result.message = (f"continuation from the reference state stalled at lambda = {lam:.4f} of 1 "
-                          f"(step below {min_step}); reached {where}{more}; max scaled residual at the "
-                          f"requested parameters {result.max_residual:.2e}; last step: {reached.message}")
-        result.warnings[0] = f"not converged: {result.message}"
-        return result
+        detail = (f"stalled at lambda = {lam:.4f} of 1 (step below {min_step}); reached {where}{more}; "
+                  f"the max scaled residual above is at the requested parameters; last step: {last_failure}")
+        status = SolveStatus(Status.STALLED, "continuation from the reference state", nit=iterations,
+                             tolerance=reached.result.tolerance, solve_time_s=elapsed, detail=detail)
+        return solver.evaluate(reached.raw.get("w", reached.raw.get("z")), target, status)
 
 
 def _format(values):
@@ -177,15 +179,14 @@ def _format(values):
 
 
 def _follow_branch(solver, rest, target, start, first_step, min_step):
-    """Collocation: predictor-corrector continuation. Returns (solution, lam, steps, iterations)."""
+    """Collocation: predictor-corrector continuation. Returns ``(solution, lam, steps,
+    iterations, last_failure)`` (``last_failure``: what the last rejected step did, or None)."""
     follower = BranchFollower(solver, rest, target - rest)
     point, _, steps, failure = follower.advance(follower.point(0.0, start), 1.0, first_step, 0.5, min_step)
     iterations = start.iterations + follower.iterations
     if failure is not None:
-        reached = point.solution
-        reached.message = _failure_text(failure)
-        return reached, point.lam, steps, iterations
-    return point.solution, 1.0, steps, iterations
+        return point.solution, point.lam, steps, iterations, _failure_text(failure)
+    return point.solution, 1.0, steps, iterations, None
 
 
 def _failure_text(failure):
@@ -199,7 +200,8 @@ def _failure_text(failure):
 
 
 def _warm_steps(solver, rest, target, solution, first_step, min_step):
-    """Shooting: warm-started solves, halving failed steps. Returns (solution, lam, steps, iterations)."""
+    """Shooting: warm-started solves, halving failed steps. Returns ``(solution, lam, steps,
+    iterations, last_failure)``."""
     lam, step, steps, iterations = 0.0, first_step, 0, solution.iterations
     while lam < 1.0:
         trial_lam = min(1.0, lam + step)
@@ -210,9 +212,8 @@ def _warm_steps(solver, rest, target, solution, first_step, min_step):
         elif step / 2 >= min_step:
             step /= 2
         else:
-            solution.message = trial.message
-            return solution, lam, steps, iterations
-    return solution, lam, steps, iterations
+            return solution, lam, steps, iterations, trial.message
+    return solution, lam, steps, iterations, None
 
 
 def _needs_continuation(solution):

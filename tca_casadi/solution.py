@@ -11,6 +11,7 @@ import numpy as np
 
 from .errors import SolverError
 from .model.rotations import matrix_to_quaternion
+from .status import SolveStatus
 from .text import signed
 
 
@@ -79,15 +80,13 @@ class ActuatorResult:
 
 @dataclass
 class Solution:
-    """An equilibrium (or a failed attempt: ``converged`` is False, never hidden)."""
-    converged: bool
-    status: str
-    message: str
+    """An equilibrium (or a failed attempt: ``converged`` is False, never hidden).
+
+    ``result`` (:class:`~tca_casadi.status.SolveStatus`) says how the solve ended; ``converged``,
+    ``status``, ``message``, ``max_residual``, ``iterations`` and the timings read it.
+    ``warnings`` are :class:`~tca_casadi.errors.PhysicsWarning` objects."""
+    result: SolveStatus
     method: str
-    max_residual: float
-    iterations: int
-    solve_time_s: float
-    build_time_s: float
     modules: list
     actuators: dict
     warnings: list = field(default_factory=list)
@@ -99,6 +98,40 @@ class Solution:
     balance: Optional[object] = None   # model.balance.GlobalBalance of the whole robot
     loads: list = field(default_factory=list)   # point loads and masses: {name, kind, position, force}
     accuracy: Optional[object] = None  # solvers.accuracy.AccuracyEstimate (cold collocation solves)
+
+    # ------------------------------------------------------------------ status
+    @property
+    def converged(self):
+        return self.result.success
+
+    @property
+    def status(self):
+        """The integer :class:`~tca_casadi.status.Status`."""
+        return self.result.status
+
+    @property
+    def message(self):
+        return self.result.message
+
+    @property
+    def max_residual(self):
+        return self.result.residual
+
+    @property
+    def iterations(self):
+        return self.result.nit
+
+    @property
+    def solve_time_s(self):
+        return self.result.solve_time_s
+
+    @property
+    def build_time_s(self):
+        return self.result.build_time_s
+
+    def warning_texts(self, kind=None):
+        """The warnings' texts (of one ``kind`` if given)."""
+        return [str(w) for w in self.warnings if kind is None or w.kind == kind]
 
     # ------------------------------------------------------------------ tip
     @property
@@ -130,8 +163,9 @@ class Solution:
         return {
             "scenario": self.scenario_name,
             "converged": bool(self.converged),
-            "status": self.status,
+            "status": int(self.status),
             "message": self.message,
+            "result": self.result.as_dict(),
             "method": self.method,
             "max_residual": float(self.max_residual),
             "iterations": int(self.iterations),
@@ -146,7 +180,8 @@ class Solution:
                            if self.parameter_names is not None else {}),
             "global_balance": self.balance.as_dict() if self.balance is not None else None,
             "accuracy": self.accuracy.as_dict() if self.accuracy is not None else None,
-            "warnings": list(self.warnings),
+            "warnings": self.warning_texts(),
+            "warning_kinds": [w.kind for w in self.warnings],
         }
 
     def save(self, directory):
@@ -174,7 +209,7 @@ class Solution:
         """A few lines for the terminal."""
         state = "converged" if self.converged else "NOT CONVERGED"
         tip = self.tip_position * 1e3
-        lines = [f"{self.scenario_name}: {state} ({self.method}, {self.iterations} iterations, "
+        lines = [f"{self.scenario_name}: {state} ({self.method}, {self.result.algorithm}, {self.iterations} iterations, "
                  f"residual {self.max_residual:.1e}, solve {self.solve_time_s * 1e3:.1f} ms, "
                  f"build {self.build_time_s * 1e3:.0f} ms)",
                  f"  tip position [mm]: {signed(tip[0])} {signed(tip[1])} {signed(tip[2])}",
@@ -187,7 +222,7 @@ class Solution:
             slack = f"{a.slack_length * 1e3:12.4f}" if a.slack_length is not None else f"{'-':>12}"
             lines.append(f"  {key:<22}{temp}{pull}{a.tension * 1e3:11.4f}{a.stroke * 1e3:13.4f}{free}{slack}")
         lines += [f"  warning: {w}" for w in self.warnings]
-        if not self.converged and not any(w.startswith("not converged") for w in self.warnings):
+        if not self.converged and not self.warning_texts("not_converged"):
             lines.append(f"  message: {self.message}")
         return "\n".join(lines)
 

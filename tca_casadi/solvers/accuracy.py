@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import PhysicsWarning
 from .assemble import BALANCE_TOLERANCE
 
 #: intervals whose indicator is at least this fraction of the largest are bisected
@@ -188,7 +189,8 @@ def control(solver, solution, params, refine=True):
     while True:
         result = estimate(solver, solution, params, solver.higher)
         if result is None:
-            solution.warnings.append("no error estimate: the degree d+1 solve on the same mesh did not converge")
+            solution.warnings.append(PhysicsWarning(
+                "accuracy", "no error estimate: the degree d+1 solve on the same mesh did not converge"))
             return solver, solution, None
         tip, tension, indicators = result
         found = AccuracyEstimate(tip, tension, options.tip_tolerance, options.tension_tolerance,
@@ -205,9 +207,10 @@ def control(solver, solution, params, refine=True):
         trial = finer.solve_newton(params, interpolate(solver.nlp, solution.raw["w"], finer.nlp, params))
         if not trial.converged:
             return solver, _attach(solution, found, True), found
-        trial.message = f"{solution.message}; mesh refined where the error was ({refinements + 1}x)"
-        trial.iterations += solution.iterations
-        trial.solve_time_s += solution.solve_time_s
+        trial.result = solution.result.noted(f"mesh refined where the error was, Newton on the finer mesh "
+                                             f"({refinements + 1}x)").replace(
+            residual=trial.result.residual, nit=trial.iterations + solution.iterations,
+            solve_time_s=trial.solve_time_s + solution.solve_time_s)
         solver, solution, refinements, previous = finer, trial, refinements + 1, found
 
 
@@ -216,5 +219,6 @@ def _attach(solution, found, refined):
     if not found.met:
         why = ("the mesh limit was reached: raise solver.max_intervals" if found.limit_reached else
                "refinement is off (solver.refine)" if not refined else f"after {found.refinements} refinements")
-        solution.warnings.append(f"{found.summary()}: {why}")
+        kind = "mesh_limit" if found.limit_reached else "accuracy"
+        solution.warnings.append(PhysicsWarning(kind, f"{found.summary()}: {why}"))
     return solution

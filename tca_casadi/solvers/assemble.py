@@ -2,6 +2,7 @@
 Shared by every solver so that all report the same quantities the same way."""
 import numpy as np
 
+from ..errors import PhysicsWarning
 from ..model.balance import global_balance, load_markers
 from ..model.compatibility import slack_length
 from ..model.rotations import ROTATION
@@ -67,24 +68,25 @@ def physics_warnings(robot, actuators):
     for actuator in robot.unknowns:
         result = actuators[actuator.key]
         if result.slack_length:
-            out.append(f"{actuator.key} is slack (F = 0; slack length {result.slack_length * 1e3:.4g} mm)")
+            out.append(PhysicsWarning("slack", f"{actuator.key} is slack (F = 0; slack length {result.slack_length * 1e3:.4g} mm)"))
         if actuator.kind != "tca":
             continue
         if result.tension < -COMPRESSION_TOLERANCE and not actuator.tension_only:
-            out.append(f"{actuator.key} is in compression (F = {result.tension * 1e3:.4g} mN): "
+            out.append(PhysicsWarning("compression", f"{actuator.key} is in compression (F = {result.tension * 1e3:.4g} mN): "
                        "a real TCA would buckle or go slack; the law's extension G_t(0) "
-                       "exp(F G_t'(0)/G_t(0)) was used")
+                       "exp(F G_t'(0)/G_t(0)) was used"))
         limit = actuator.law.monotone_limit
         if result.tension > limit:
-            out.append(f"{actuator.key} tension {result.tension * 1e3:.4g} mN is beyond the "
-                       f"fit's monotone range ({limit * 1e3:.4g} mN)")
+            out.append(PhysicsWarning("fit_range", f"{actuator.key} tension {result.tension * 1e3:.4g} mN "
+                                      f"is beyond the fit's monotone range ({limit * 1e3:.4g} mN)"))
     return out
 
 
-def build_solution(robot, params, module_data, tensions, lengths, status):
+def build_solution(robot, params, module_data, tensions, lengths, result, method, raw, notices=()):
     """Solution from ``module_data = [(s, states, base_wrench_body, weights), ...]``, tensions per
-    actuator (list in ``robot.actuators`` order) and lengths; ``status`` holds converged,
-    status, message, method, max_residual, iterations, solve_time_s, build_time_s, raw."""
+    actuator (list in ``robot.actuators`` order) and lengths; ``result`` the
+    :class:`SolveStatus`, ``method`` the solver's name, ``raw`` its variables (``w`` or ``z``),
+    ``notices`` the solver's own :class:`PhysicsWarning` s (e.g. a floored tolerance)."""
     robot = robot.at(params)          # stiffness, routes, laws at these parameters
     modules = [module_result(robot.modules[m], *data) for m, data in enumerate(module_data)]
     actuators = {}
@@ -94,14 +96,21 @@ def build_solution(robot, params, module_data, tensions, lengths, status):
                                                   lengths[k], parameter)
     warnings = physics_warnings(robot, actuators)
     balance = global_balance(robot, modules, params, tensions)
-    if status["converged"] and balance.relative > BALANCE_TOLERANCE:
-        warnings.append(f"global balance off by {balance.relative:.1e} of the forces in play "
+    if result.success and balance.relative > BALANCE_TOLERANCE:
+        warnings.append(PhysicsWarning("global_balance", f"global balance off by {balance.relative:.1e} of the forces in play "
                         f"(force {np.abs(balance.force).max():.2e} N, moment "
                         f"{np.abs(balance.moment).max():.2e} N m): the mesh is too coarse for this "
-                        "robot; raise solver.intervals")
-    if not status["converged"]:
-        warnings.insert(0, f"not converged: {status['message']}")
-    return Solution(modules=modules, actuators=actuators, warnings=warnings,
+                        "robot; raise solver.intervals"))
+    warnings.extend(notices)
+    if not result.success:
+        warnings.insert(0, not_converged(result))
+    return Solution(result=result, method=method, raw=dict(raw, method=method),
+                    modules=modules, actuators=actuators, warnings=warnings,
                     parameters=np.array(params, float), parameter_names=dict(robot.layout.slices),
                     scenario_name=robot.name, tip_module=robot.tip_index, balance=balance,
-                    loads=load_markers(robot, modules, params), **status)
+                    loads=load_markers(robot, modules, params))
+
+
+def not_converged(result):
+    """The warning an unconverged :class:`SolveStatus` puts first in its solution's warnings."""
+    return PhysicsWarning("not_converged", f"not converged: {result.message}")

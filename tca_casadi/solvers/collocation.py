@@ -7,6 +7,7 @@ import casadi as ca
 import numpy as np
 
 from ..discretisation import CollocationNLP
+from ..status import SolveStatus, Status
 from .assemble import build_solution
 from .guess import reference_guess
 from .newton import SquareSystem
@@ -77,7 +78,10 @@ class CollocationSolver:
         return self._ipopt_instance
 
     def solve_ipopt(self, params, initial=None):
-        """IPOPT on the square NLP at ``params``, warm-started from ``initial`` (a Solution)."""
+        """IPOPT on the square NLP at ``params``, warm-started from ``initial`` (a Solution).
+        Converged when IPOPT reports success *and* the max scaled residual meets
+        ``solver.tolerance`` (IPOPT's own ``tol`` on its overall error is floored at 1e-8, which
+        never loosens that test; its "acceptable level" exits do not pass it)."""
         params = np.asarray(params, dtype=float)
         w0 = self.initial_guess(params, initial)
         start = time.perf_counter()
@@ -86,13 +90,11 @@ class CollocationSolver:
         self.solve_count += 1
         stats = self._ipopt.stats()
         w = np.array(result["x"]).ravel()
-        residual = self.max_residual(w, params)
-        converged = bool(stats["success"]) and residual <= 10 * self.options.tolerance
-        status = {"converged": converged, "status": stats["return_status"],
-                  "message": _message(stats, residual, self.options.tolerance),
-                  "method": self.method, "max_residual": residual,
-                  "iterations": int(stats.get("iter_count", 0)), "solve_time_s": elapsed,
-                  "build_time_s": self.build_time_s, "raw": {"w": w, "method": self.method}}
+        failure = None if stats["success"] else (
+            Status.MAX_ITERATIONS if stats["return_status"] == "Maximum_Iterations_Exceeded" else Status.ALGORITHM_FAILED)
+        status = SolveStatus.judged("IPOPT", self.max_residual(w, params), self.options.tolerance, failure,
+                                    nit=int(stats.get("iter_count", 0)), solve_time_s=elapsed,
+                                    build_time_s=self.build_time_s, detail=f"IPOPT: {stats['return_status']}")
         return self._assemble(w, params, status)
 
     @property
@@ -119,23 +121,20 @@ class CollocationSolver:
         the same equations and tolerance as :meth:`solve`, without IPOPT's machinery (``lu``: a
         factorised Jacobian from a nearby point for the first chord steps)."""
         params = np.asarray(params, dtype=float)
-        start = time.perf_counter()
-        result = self.square.newton(w0, params, self.options.tolerance, lu=lu)
+        w, status = self.square.newton(w0, params, self.options.tolerance, lu=lu)
         self.solve_count += 1
-        status = {"converged": result.converged, "status": "Newton",
-                  "message": result.message, "max_residual": result.residual,
-                  "iterations": result.iterations, "solve_time_s": time.perf_counter() - start}
-        return self.evaluate(result.w, params, status)
+        return self.evaluate(w, params, status)
 
     def evaluate(self, w, params, status):
-        """A :class:`Solution` from scaled variables ``w`` found by another algorithm (e.g. the
-        pseudo-arclength corrector); ``status`` as in :func:`build_solution`, without ``raw``
-        (its ``max_residual``, if not a number, is evaluated at ``(w, params)``)."""
-        status = dict(status, method=self.method, build_time_s=self.build_time_s,
-                      raw={"w": np.asarray(w, float), "method": self.method})
-        if not np.isfinite(status.get("max_residual", np.nan)):
-            status["max_residual"] = self.max_residual(w, params)
-        return self._assemble(np.asarray(w, float), np.asarray(params, float), status)
+        """A :class:`Solution` from scaled variables ``w`` found by some algorithm (Newton, the
+        pseudo-arclength corrector); ``status`` its :class:`SolveStatus` (a residual that is not
+        a number is evaluated at ``(w, params)``)."""
+        w, params = np.asarray(w, float), np.asarray(params, float)
+        if not np.isfinite(status.residual):
+            status = SolveStatus.judged(status.algorithm, self.max_residual(w, params), status.tolerance,
+                                        status.status, nit=status.nit, solve_time_s=status.solve_time_s,
+                                        detail=status.detail)
+        return self._assemble(w, params, status.replace(build_time_s=self.build_time_s))
 
     def max_residual(self, w, params):
         """Largest scaled constraint violation at ``(w, params)``."""
@@ -159,11 +158,5 @@ class CollocationSolver:
                 tensions.append(w_phys[nlp.tension_index[self.robot.unknowns.index(actuator)]])
             else:
                 tensions.append(params[self.robot.layout[actuator.parameter]][0])
-        return build_solution(self.robot, params, module_data, tensions, lengths.ravel(), status)
-
-
-def _message(stats, residual, tolerance):
-    if stats["success"] and residual <= 10 * tolerance:
-        return f"IPOPT: {stats['return_status']}"
-    return (f"IPOPT: {stats['return_status']} after {stats.get('iter_count', 0)} iterations; "
-            f"max scaled residual {residual:.2e} (tolerance {tolerance:.0e})")
+        return build_solution(self.robot, params, module_data, tensions, lengths.ravel(), status,
+                              self.method, {"w": w})

@@ -16,6 +16,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..status import SolveStatus
+
 
 @dataclass
 class BranchPoint:
@@ -159,8 +161,9 @@ class ArclengthFollower:
             tangent = self.tangent(linear, tangent)
             if lam > 1.0 and tangent[-1] > 0:
                 return self._land(current, record, count)
-            solution = self.solver.evaluate(w, self.params_at(lam), _newton_status(
-                self.solver.max_residual(w, self.params_at(lam)), self.tolerance, iterations, elapsed))
+            status = SolveStatus.judged("pseudo-arclength corrector", self.solver.max_residual(w, self.params_at(lam)),
+                                        self.tolerance, nit=iterations, solve_time_s=elapsed)
+            solution = self.solver.evaluate(w, self.params_at(lam), status)
             current, count = record(self.branch.point(lam, solution, w, tangent)), count + 1
             if lam < -0.5:
                 return False, ("the branch turned back and left the swept range (below the start "
@@ -230,11 +233,3 @@ def solve_bordered(J_w, column, border, rhs):
 
 def _normalise(vector):
     return vector / np.linalg.norm(vector)
-
-
-def _newton_status(residual, tolerance, iterations, elapsed):
-    converged = residual <= 10 * tolerance
-    return {"converged": converged, "status": "Newton (pseudo-arclength corrector)",
-            "message": f"pseudo-arclength Newton corrector: {iterations} iterations, max scaled "
-                       f"residual {residual:.1e}", "max_residual": residual,
-            "iterations": iterations, "solve_time_s": elapsed}

@@ -6,27 +6,19 @@ rebuilt and no CasADi matrix is converted at solve time. The Jacobian is factori
 with the natural column order (the collocation Jacobian is block-banded: that order makes less
 work than COLAMD here; row pivoting keeps it stable).
 """
-from dataclasses import dataclass
+import time
 
 import casadi as ca
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..status import SolveStatus, Status
 from .linearisation import Linearisation
 
 
 #: a chord step (the factorised Jacobian of an earlier point) is kept if it cuts |g|_2 this much
 CHORD_CONTRACTION = 0.1
-
-
-@dataclass
-class NewtonResult:
-    w: np.ndarray
-    converged: bool
-    iterations: int
-    residual: float           # max |g| (scaled) at w
-    message: str
 
 
 class _Buffered:
@@ -76,15 +68,22 @@ class SquareSystem:
         triangular solves; a weaker contraction means a long linear tail, so the Jacobian is
         refreshed instead) and the full Newton step is backtracked on ``|g|_2``. ``lu``: a
         factorised Jacobian from a nearby point to start the chord steps with (e.g. the
-        linearisation of the previous point of a path)."""
+        linearisation of the previous point of a path). Returns ``(w, SolveStatus)``."""
+        started = time.perf_counter()
         w, fresh = np.array(w0, float), False
         g = self.residual(w, P)
+
+        def ended(iteration, failure=None):
+            residual = float(np.max(np.abs(g))) if g.size else 0.0
+            return w, SolveStatus.judged("Newton", residual, tolerance, failure, nit=iteration,
+                                         solve_time_s=time.perf_counter() - started)
+
         for iteration in range(max_iterations + 1):
             residual = float(np.max(np.abs(g))) if g.size else 0.0
             if not np.isfinite(residual):
-                return NewtonResult(w, False, iteration, residual, "Newton: the residual is not finite")
+                return ended(iteration, Status.NOT_FINITE)
             if residual <= tolerance:
-                return NewtonResult(w, True, iteration, residual, f"Newton: converged in {iteration} iterations")
+                return ended(iteration)
             if iteration == max_iterations:
                 break
             if lu is not None and not fresh:
@@ -97,13 +96,12 @@ class SquareSystem:
                 _, J = self.evaluate(w, P)
                 lu, fresh = spla.splu(J, permc_spec="NATURAL"), True
             except RuntimeError:
-                return NewtonResult(w, False, iteration, residual, "Newton: singular Jacobian")
+                return ended(iteration, Status.SINGULAR)
             w, g, accepted = self._line_search(w, g, lu.solve(g), P)
             fresh = False
             if not accepted:
-                return NewtonResult(w, False, iteration, residual, "Newton: no descent along the step")
-        return NewtonResult(w, False, max_iterations, residual,
-                            f"Newton: not converged in {max_iterations} iterations (residual {residual:.1e})")
+                return ended(iteration, Status.NO_DESCENT)
+        return ended(max_iterations, Status.MAX_ITERATIONS)
 
     def _line_search(self, w, g, step, P, shortest=1 / 64):
         norm, alpha = np.linalg.norm(g), 1.0

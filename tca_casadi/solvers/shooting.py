@@ -28,6 +28,8 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import root
 
 from ..discretisation.mesh import module_breakpoints
+from ..errors import PhysicsWarning
+from ..status import SolveStatus, Status
 from ..model import boundary
 from ..model.compatibility import compatibility_residuals
 from ..model.loads import distributed_fields, is_active
@@ -137,49 +139,50 @@ class ShootingSolver:
         elapsed = time.perf_counter() - start
         self.solve_count += 1
         worst = float(np.max(np.abs(residual_value))) if residual_value.size else 0.0
-        tolerance = self.tolerance
-        converged = bool(worst <= tolerance)
-        message = (f"scipy root (hybr, {self.jacobian} Jacobian): {result.message.strip()}; max scaled residual "
-                   f"{worst:.2e} ({self._tolerance_text()}), {shots[0]} shots")
-        status = {"converged": converged, "status": "success" if converged else "failure",
-                  "message": message, "method": self.method, "max_residual": worst,
-                  "iterations": int(result.nfev), "solve_time_s": elapsed,
-                  "build_time_s": self.build_time_s, "raw": {"z": result.x, "method": self.method}}
-        return build_solution(self.robot, params, *trajectory, status)
+        status = SolveStatus.judged("scipy root (hybr)", worst, self.tolerance, nit=int(result.nfev),
+                                    solve_time_s=elapsed, build_time_s=self.build_time_s,
+                                    detail=f"{self.jacobian} Jacobian: {result.message.strip()}; {shots[0]} shots")
+        return build_solution(self.robot, params, *trajectory, status, self.method, {"z": result.x},
+                              self._notices(worst))
 
     def evaluate(self, z, params, status):
         """A :class:`Solution` of one shot from scaled unknowns ``z`` at ``params``; ``status``
-        as in :func:`build_solution` without ``raw`` (``max_residual`` is the shot's)."""
+        the :class:`SolveStatus` of the algorithm that found ``z`` (its residual is replaced by
+        the shot's)."""
         params = np.asarray(params, dtype=float)
         try:
             residual_value, trajectory = self._trajectory(np.asarray(z, float), params)
         except _ShotFailed as exc:
-            return self._failed(params, str(exc), status.get("solve_time_s", 0.0))
+            return self._failed(params, str(exc), status.solve_time_s)
         worst = float(np.max(np.abs(residual_value))) if residual_value.size else 0.0
-        status = dict(status, max_residual=worst, method=self.method, build_time_s=self.build_time_s,
-                      raw={"z": np.asarray(z, float), "method": self.method})
-        return build_solution(self.robot, params, *trajectory, status)
+        status = SolveStatus.judged(status.algorithm, worst, self.tolerance, status.status, nit=status.nit,
+                                    solve_time_s=status.solve_time_s, build_time_s=self.build_time_s,
+                                    detail=status.detail)
+        return build_solution(self.robot, params, *trajectory, status, self.method,
+                              {"z": np.asarray(z, float)}, self._notices(worst))
 
     def _failed(self, params, message, elapsed):
         """A Solution-shaped failure carrying the reference shape's arrays; converged False."""
         trial = _reference_trajectory(self.robot, params)
-        status = {"converged": False, "status": "failure", "message": f"shooting failed: {message}",
-                  "method": self.method, "max_residual": float("inf"), "iterations": 0,
-                  "solve_time_s": elapsed, "build_time_s": self.build_time_s, "raw": {"method": self.method}}
-        return build_solution(self.robot, params, *trial, status)
+        status = SolveStatus(Status.INTEGRATION_FAILED, "scipy root (hybr)", residual=float("inf"),
+                             tolerance=self.tolerance, solve_time_s=elapsed, build_time_s=self.build_time_s,
+                             detail=message)
+        return build_solution(self.robot, params, *trial, status, self.method, {})
+
+    def _notices(self, residual):
+        """A ``tolerance_floor`` warning when the accepted ``residual`` met the floored
+        tolerance (:data:`TOLERANCE_FLOOR`) but not ``solver.tolerance``."""
+        if not self.options.tolerance < residual <= self.tolerance:
+            return []
+        return [PhysicsWarning("tolerance_floor", f"shooting accepted a max scaled residual of {residual:.1e}, "
+                               f"above solver.tolerance {self.options.tolerance:.0e}: integration at rtol "
+                               f"{self.rtol:.0e} cannot resolve less than {TOLERANCE_FLOOR:.0e}")]
 
     @property
     def tolerance(self):
         """Accepted scaled residual: the scenario's tolerance, floored by what the integrator's
         tolerances can deliver (:data:`TOLERANCE_FLOOR`; the solution says so when it applies)."""
         return max(self.options.tolerance, TOLERANCE_FLOOR)
-
-    def _tolerance_text(self):
-        """The accepted tolerance as the message states it, saying when the floor applied."""
-        if self.options.tolerance >= TOLERANCE_FLOOR:
-            return f"tolerance {self.tolerance:.0e}"
-        return (f"tolerance {self.tolerance:.0e}: solver.tolerance {self.options.tolerance:.0e} raised to "
-                f"what integration at rtol {self.rtol:.0e} delivers")
 
     # ------------------------------------------------------------------ one shot
     def _shot(self, z, scale, params, derivatives):

@@ -34,6 +34,7 @@ class CheckReport:
     position_tolerance: float = POSITION_TOLERANCE
     tension_tolerance: float = TENSION_TOLERANCE
     accuracy: dict = field(default_factory=dict)     # method -> its error estimate (if any)
+    warnings: dict = field(default_factory=dict)     # method -> [PhysicsWarning text, ...]
 
     @property
     def worst_relative_tension(self):
@@ -77,6 +78,7 @@ class CheckReport:
                          f"{estimate['tension_error_estimate']:.1e} ({'met' if estimate['met'] else 'NOT met'}; "
                          f"{'+'.join(map(str, estimate['intervals']))} intervals)")
         lines.append("  solve time: " + ", ".join(f"{k} {v:.3f} s" for k, v in self.solve_times_s.items()))
+        lines += [f"  warning ({method}): {text}" for method, texts in self.warnings.items() for text in texts]
         return "\n".join(lines)
 
 
@@ -105,7 +107,8 @@ def compare_solutions(first, second, position_tolerance=POSITION_TOLERANCE,
         max_centerline_distance=distance, tension_differences=tensions, slack_differences=slack,
         solve_times_s={a: first.solve_time_s, b: second.solve_time_s},
         position_tolerance=position_tolerance, tension_tolerance=tension_tolerance,
-        accuracy={s.method: s.accuracy.as_dict() for s in (first, second) if s.accuracy is not None})
+        accuracy={s.method: s.accuracy.as_dict() for s in (first, second) if s.accuracy is not None},
+        warnings={s.method: s.warning_texts() for s in (first, second)})
 
 
 def _centerline_distance(ma, mb):
@@ -122,9 +125,10 @@ def _centerline_distance(ma, mb):
 
 
 def check(simulation, position_tolerance=POSITION_TOLERANCE, tension_tolerance=TENSION_TOLERANCE):
-    """Solve ``simulation`` by collocation and (independently, from a cold start) by shooting."""
-    collocation = simulation.solve(method="collocation")
+    """Solve ``simulation`` by collocation and (independently, from a cold start) by shooting.
+    The solutions' warnings are in the report (not issued)."""
+    collocation = simulation.solve(method="collocation", warn=False)
     simulation.solver("shooting").sample_s = [m.s for m in collocation.modules]
-    shooting = simulation.solve(method="shooting")
+    shooting = simulation.solve(method="shooting", warn=False)
     report = compare_solutions(collocation, shooting, position_tolerance, tension_tolerance)
     return report, collocation, shooting

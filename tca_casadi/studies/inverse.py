@@ -34,6 +34,7 @@ from ..errors import ScenarioError
 from ..model.rotations import ROTATION, rotation_angle, rotation_numpy
 from ..scenario.checks import closest
 from ..solvers.continuation import BranchFollower
+from ..status import SolveStatus, Status
 from .inverse_result import InverseResult, write_path_results  # noqa: F401  (re-exported)
 from .parameters import resolve_parameters
 from .targets import Target, TargetLayout, read_targets  # noqa: F401  (re-exported)
@@ -265,33 +266,37 @@ class InverseStatics:
         return solution.raw["w"] if solution.converged else None
 
     def _attempt(self, w0, tau0, vector, target):
+        """One optimisation from ``(w0, tau0)``: a dict with the answer (``w``, ``tau``, pose,
+        errors), ``equilibrium`` (the constraints hold) and ``result`` (:class:`SolveStatus`)."""
+        started = time.perf_counter()
         if self.method == "reduced":
             from .inverse_reduced import reduced_attempt
-            w, tau, status, iterations = reduced_attempt(self, w0, tau0, vector)
-            return self._describe_attempt(w, tau, status == "success", float("nan"), iterations,
-                                          status, vector, target)
+            w, tau, failure, iterations, detail = reduced_attempt(self, w0, tau0, vector)
+            return self._describe_attempt(w, tau, "least squares (dogbox)", failure, float("nan"), iterations,
+                                          detail, vector, target, started)
         result = self._ipopt(x0=np.r_[w0, tau0], p=np.r_[self.sim.params, vector],
-
                              lbx=np.r_[np.full(self._n_w, -np.inf), np.zeros(len(tau0))],
                              ubx=np.r_[np.full(self._n_w, np.inf), np.ones(len(tau0))],
                              lbg=0.0, ubg=0.0)
         stats = self._ipopt.stats()
         x = np.array(result["x"]).ravel()
         w, tau = x[:self._n_w], np.clip(x[self._n_w:], 0.0, 1.0)
-        return self._describe_attempt(w, tau, bool(stats["success"]), float(result["f"]),
-                                      int(stats.get("iter_count", 0)), stats["return_status"],
-                                      vector, target)
+        failure = None if stats["success"] else (
+            Status.MAX_ITERATIONS if stats["return_status"] == "Maximum_Iterations_Exceeded" else Status.ALGORITHM_FAILED)
+        return self._describe_attempt(w, tau, "IPOPT", failure, float(result["f"]), int(stats.get("iter_count", 0)),
+                                      f"IPOPT: {stats['return_status']}", vector, target, started)
 
-    def _describe_attempt(self, w, tau, success, objective, iterations, status, vector, target):
+    def _describe_attempt(self, w, tau, algorithm, failure, objective, iterations, detail, vector, target, started):
+        tolerance = self.sim.scenario.solver.tolerance
         residual = self.solver.max_residual(w, self.params_at(tau))
-        equilibrium = residual <= 10 * self.sim.scenario.solver.tolerance
-        converged = equilibrium and success
+        result = SolveStatus.judged(algorithm, residual, tolerance, failure, nit=iterations, detail=detail,
+                                    solve_time_s=time.perf_counter() - started, build_time_s=self.build_time_s)
         position, R = (np.array(v) for v in self._pose(w, tau, self.sim.params, vector))
         position = position.ravel()
         if not np.isfinite(objective):
             objective = float(np.sum(np.array(self._residuals(w, tau, self.sim.params, vector)[0]) ** 2))
-        return {"w": w, "tau": tau, "converged": converged, "equilibrium": equilibrium,
-                "objective": objective, "iterations": iterations, "status": status,
+        return {"w": w, "tau": tau, "result": result, "equilibrium": residual <= tolerance,
+                "objective": objective, "iterations": iterations,
                 "position": position, "R": R, "residual": residual,
                 "position_error": float(np.linalg.norm(position - target.position)),
                 "angle_error": self._angle_error(R, target)}
@@ -312,22 +317,22 @@ class InverseStatics:
         temperatures = {p.path: float(v) for p, v in zip(self.parameters, self.values(best["tau"]))}
         forward, difference = self._verify(best, target)
         reachable = self._reached(best)
-        solver = "IPOPT" if self.method == "ipopt" else "least squares"
+        status = best["result"]
         if not best["equilibrium"]:
-            message = f"{solver} did not converge ({best['status']}, constraint residual {best['residual']:.1e})"
+            message = f"no equilibrium: {status.message}"
         elif reachable:
-            message = "target reached" + ("" if best["converged"] else f" ({solver}: {best['status']})")
-        elif not best["converged"]:
+            message = "target reached" + ("" if status.success else f" ({status.message})")
+        elif not status.success:
             message = (f"no start reached the target; the closest pose found, "
                        f"{best['position_error'] * 1e3:.4g} mm away, is not proven optimal "
-                       f"({solver}: {best['status']})")
+                       f"({status.message})")
         else:
             message = (f"target unreachable within the bounds: the closest pose found is "
                        f"{best['position_error'] * 1e3:.4g} mm away")
         return InverseResult(target, temperatures, best["position"], best["R"], best["position_error"],
-                             best["angle_error"], reachable, best["converged"], best["objective"],
+                             best["angle_error"], reachable, status.success, best["objective"],
                              forward, difference, elapsed, iterations, tried, message,
-                             best["w"], best["tau"], self.method)
+                             best["w"], best["tau"], self.method, status)
 
     def _verify(self, best, target):
         """Independent forward solve at the answer's temperatures: predictor-corrector
@@ -355,6 +360,6 @@ class InverseStatics:
 
 def _better(attempt, best):
     """Prefer an IPOPT-optimal attempt, then the lower objective."""
-    return (attempt["converged"], -attempt["objective"]) > (best["converged"], -best["objective"])
+    return (attempt["result"].success, -attempt["objective"]) > (best["result"].success, -best["objective"])
 
 

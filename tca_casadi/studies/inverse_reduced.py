@@ -11,6 +11,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ..solvers.continuation import BranchFollower
+from ..status import SolveStatus, Status
 
 
 class _Equilibria:
@@ -28,9 +29,9 @@ class _Equilibria:
             return self.w
         params = self.inverse.params_at(tau)
         predicted = self.w if self.rate is None else self.w + self.rate @ (tau - self.tau)
-        newton = self.solver.square.newton(predicted, params, self.inverse.sim.scenario.solver.tolerance,
-                                           lu=self.lu)
-        w = newton.w if newton.converged else self._continue(params)
+        w, status = self.solver.square.newton(predicted, params, self.inverse.sim.scenario.solver.tolerance,
+                                              lu=self.lu)
+        w = w if status.success else self._continue(params)
         if w is not None:
             self.tau, self.w, self.rate = tau.copy(), w, None
         return w
@@ -39,16 +40,15 @@ class _Equilibria:
         """Predictor-corrector continuation from the last equilibrium to ``params``."""
         start = self.inverse.params_at(self.tau)
         follower = BranchFollower(self.solver, start, params - start)
-        solution = self.solver.evaluate(self.w, start, {"converged": True, "status": "start",
-                                                        "message": "", "max_residual": 0.0,
-                                                        "iterations": 0, "solve_time_s": 0.0})
+        solution = self.solver.evaluate(self.w, start, SolveStatus.judged(
+            "start", float("nan"), self.inverse.sim.scenario.solver.tolerance))
         point, _, _, failure = follower.advance(follower.point(0.0, solution), 1.0, 0.5, 0.5, 1e-3)
         return None if failure is not None else point.w
 
 
 def reduced_attempt(inverse, w0, tau0, vector):
-    """Minimise from ``(w0, tau0)``. Returns ``(w, tau, status, iterations)``; status is
-    'success' when least squares converged on equilibria throughout."""
+    """Minimise from ``(w0, tau0)``. Returns ``(w, tau, failure, iterations, detail)``;
+    ``failure`` is None (least squares converged on equilibria throughout) or a :class:`Status`."""
     equilibria = _Equilibria(inverse, w0, tau0)
     fixed = inverse.sim.params
     size = int(inverse._residuals.size1_out(0))
@@ -75,7 +75,8 @@ def reduced_attempt(inverse, w0, tau0, vector):
                            max_nfev=200)
     tau = np.clip(result.x, 0.0, 1.0)
     w = equilibria(tau)
+    detail = f"least squares: {result.message}"
     if w is None:
-        return np.asarray(w0, float), np.asarray(tau0, float), "no equilibrium at the answer", result.nfev
-    status = "success" if result.status > 0 else f"least squares: {result.message}"
-    return w, tau, status, int(result.nfev)
+        return np.asarray(w0, float), np.asarray(tau0, float), Status.NO_EQUILIBRIUM, int(result.nfev), detail
+    failure = None if result.status > 0 else Status.MAX_ITERATIONS if result.status == 0 else Status.ALGORITHM_FAILED
+    return w, tau, failure, int(result.nfev), detail

@@ -33,6 +33,7 @@ class InverseResult:
     w: np.ndarray = field(repr=False, default=None)
     tau: np.ndarray = field(repr=False, default=None)
     method: str = "reduced"            # 'reduced' (least squares) or 'ipopt' (full space)
+    result: Optional[object] = None    # SolveStatus of the optimisation that gave the answer
 
     @property
     def verified(self):
@@ -51,7 +52,8 @@ class InverseResult:
                 "verification_difference": float(self.verification_difference),
                 "verified": bool(self.verified), "objective": float(self.objective),
                 "solve_time_s": float(self.solve_time_s), "iterations": int(self.iterations),
-                "starts": int(self.starts), "method": self.method}
+                "starts": int(self.starts), "method": self.method,
+                "result": None if self.result is None else self.result.as_dict()}
 
     def save(self, directory, plot=True):
         """Write ``inverse.json``, the forward ``solution.json`` + ``arrays.npz`` and, with

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ScenarioError
+from ..errors import PhysicsWarning, ScenarioError
 from ..solvers.continuation import BranchFollower
 from .compare import compare_solutions
 from .objects import ObjectTracker
@@ -127,8 +127,8 @@ def run_sequence(sim, steps=None, frames_per_step=0, progress=None, check=False)
     started = time.perf_counter()
     result = SequenceResult([], [])
     tracker = ObjectTracker(sim.scenario, sim.robot)
-    previous = sim.solve(method="collocation")
-    shot = sim.solve(method="shooting") if check else None
+    previous = sim.solve(method="collocation", warn=False)
+    shot = sim.solve(method="shooting", warn=False) if check else None
     for index, step in enumerate(steps):
         name, values = (step.name, step.set) if hasattr(step, "name") else (step["name"], step.get("set", {}))
         before = sim.params.copy()
@@ -171,8 +171,8 @@ def _track_objects(result, tracker, solution, name):
     for object_name in newly_held:
         angle = tracker.grip_angle(solution, object_name)
         if angle is not None and abs(angle - 90.0) > GRIP_ANGLE_TOLERANCE:
-            result.warnings.append(f"step {name!r}: the gripper closes on {object_name!r} at {angle:.1f} deg "
-                                   f"to its long axis, not across it (90 deg)")
+            result.warnings.append(PhysicsWarning("grasp", f"step {name!r}: the gripper closes on {object_name!r} "
+                                                  f"at {angle:.1f} deg to its long axis, not across it (90 deg)"))
 
 
 def _check_step(sim, result, solution, shot):
@@ -181,8 +181,9 @@ def _check_step(sim, result, solution, shot):
     shooting.sample_s = [m.s for m in solution.modules]
     other = shooting.solve(sim.params, initial=shot if shot is not None and shot.converged else None)
     if not other.converged:
-        result.warnings.append(f"step {result.names[-1]!r}: shooting did not converge from the previous "
-                               "step's shooting solution; started it from this step's collocation solution")
+        result.warnings.append(PhysicsWarning("sequence", f"step {result.names[-1]!r}: shooting did not converge "
+                                              "from the previous step's shooting solution; started it from this "
+                                              "step's collocation solution"))
         other = shooting.solve(sim.params, initial=solution)
     result.checks.append(compare_solutions(solution, other))
     return other
@@ -192,7 +193,7 @@ def _solve_step(sim, before, previous, frames):
     """From ``previous`` (at parameters ``before``) to the current parameters, by continuation."""
     solver = sim.solver("collocation")
     if previous.raw.get("w") is None or previous.raw["w"].size != solver.nlp.scale.size:
-        return sim.solve(method="collocation"), []          # the structure changed: start afresh
+        return sim.solve(method="collocation", warn=False), []          # the structure changed: start afresh
     follower = BranchFollower(solver, before, sim.params - before)
     point = follower.point(0.0, previous)
     transition = []
@@ -200,7 +201,7 @@ def _solve_step(sim, before, previous, frames):
     for target in targets:
         point, _, _, failure = follower.advance(point, float(target), float(target - point.lam), 1.0, 1e-4)
         if failure is not None:
-            solution = sim.solve(method="collocation")            # from the reference state
+            solution = sim.solve(method="collocation", warn=False)            # from the reference state
             return solution, transition
         transition.append((float(target), point.solution))
     sim.last = point.solution

@@ -35,7 +35,7 @@ def test_refinement_meets_the_tolerance_and_the_estimate_is_honest(seed):
     error = float(np.linalg.norm(solution.tip_position - reference))
     assert error <= estimate.tip_tolerance
     assert 0.5 <= estimate.tip_error / error <= 2.0, (estimate.tip_error, error)
-    assert not [w for w in solution.warnings if "accuracy" in w or "global balance" in w]
+    assert not [w for w in solution.warning_texts() if "accuracy" in w or "global balance" in w]
 
 
 def test_without_refinement_the_estimate_says_how_far_off():
@@ -46,7 +46,7 @@ def test_without_refinement_the_estimate_says_how_far_off():
     assert error > 1e-6                                          # the starting mesh really is coarse
     assert 0.5 <= solution.accuracy.tip_error / error <= 2.0
     assert not solution.accuracy.met
-    assert any("NOT met" in w and "refinement is off" in w for w in solution.warnings)
+    assert any("NOT met" in w and "refinement is off" in w for w in solution.warning_texts())
 
 
 def test_reaching_the_mesh_limit_is_a_warning():
@@ -54,7 +54,7 @@ def test_reaching_the_mesh_limit_is_a_warning():
     scenario["solver"] = {"max_intervals": 8}
     solution = Simulation.from_file(scenario).solve()
     assert solution.converged and not solution.accuracy.met and solution.accuracy.limit_reached
-    assert any("mesh limit" in w and "solver.max_intervals" in w for w in solution.warnings)
+    assert any("mesh limit" in w and "solver.max_intervals" in w for w in solution.warning_texts())
 
 
 def test_shipped_scenarios_meet_it_on_the_starting_mesh_and_report_it(scenarios, tmp_path):

@@ -194,7 +194,7 @@ def test_a_failed_solve_reports_the_users_inputs_and_how_far_it_got(capsys, bend
     table = [line.split() for line in out.splitlines() if line.strip().startswith("bending.tca")]
     assert [row[1] for row in table] == ["25.0", "100.0", "100.0"]         # as given, not ramped
     assert "stalled at lambda = " in out and "of 1" in out and "bending.tca2.temperature" in out
-    assert "max scaled residual at the requested parameters" in out
+    assert "max scaled residual above is at the requested parameters" in out
     saved = json.loads((tmp_path / "solution.json").read_text())
     assert saved["converged"] is False and saved["max_residual"] > 1e-6
 

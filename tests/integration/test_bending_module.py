@@ -83,7 +83,7 @@ def test_unconverged_solve_is_reported_as_such(scenarios):
     sim = Simulation.from_file(scenarios / "bending_module.yaml", ["solver.max_iterations=1"])
     solution = sim.solve(continuation="never")
     assert not solution.converged
-    assert solution.warnings[0].startswith("not converged")
+    assert solution.warnings[0].kind == "not_converged"
     with pytest.raises(Exception, match="did not converge"):
         solution.raise_if_failed()
 
@@ -96,7 +96,7 @@ def test_compressed_passive_tca_is_reported(scenarios):
     solution = sim.solve()
     tca1 = solution.actuators["bending.tca1"]
     assert solution.converged and tca1.tension < 0 and tca1.stroke < 0
-    assert any("bending.tca1 is in compression" in w for w in solution.warnings)
+    assert any("bending.tca1 is in compression" in w for w in solution.warning_texts())
     law = sim.robot.tcas[0].law                      # the C1 extension of G_t below zero force
     assert tca1.stroke == pytest.approx(float(law.stretch(tca1.tension)), abs=1e-12)
 
@@ -104,4 +104,4 @@ def test_compressed_passive_tca_is_reported(scenarios):
 def test_tension_beyond_the_fit_is_reported(scenarios):
     solution = Simulation.from_file(scenarios / "twisting_module.yaml", ["twisting.tca.temperature=140"]).solve()
     assert solution.converged and solution.actuators["twisting.tca"].tension > 0.1504
-    assert any("beyond the fit's monotone range" in w for w in solution.warnings)
+    assert any("beyond the fit's monotone range" in w for w in solution.warning_texts())

@@ -6,6 +6,7 @@ import pytest
 
 from conftest import SCENARIOS
 from tca_casadi import Simulation
+from tca_casadi.status import Status
 
 SHIPPED = sorted(SCENARIOS.rglob("*.yaml"))
 
@@ -39,7 +40,7 @@ def test_newton_matches_ipopt_on_a_warm_step(path):
     solver = sim.solver()
     by_ipopt = solver.solve_ipopt(sim.params, start)
     by_newton = solver.solve_newton(sim.params, start.raw["w"])
-    assert by_newton.status == "Newton"
+    assert by_newton.result.algorithm == "Newton" and by_newton.status == Status.CONVERGED
     assert_same(by_ipopt, by_newton)
 
 
@@ -51,7 +52,7 @@ def test_newton_algorithm_matches_ipopt_algorithm(path):
     assert_same(by_ipopt.solve(), fast.solve())
     nudge(by_ipopt), nudge(fast)
     warm_ipopt, warm_fast = by_ipopt.solve(warm_start="last"), fast.solve(warm_start="last")
-    assert warm_fast.status == "Newton" and warm_ipopt.status != "Newton"
+    assert warm_fast.result.algorithm == "Newton" and warm_ipopt.result.algorithm == "IPOPT"
     assert_same(warm_ipopt, warm_fast)
 
 
@@ -63,7 +64,7 @@ def tip_load(force, *options):
 def test_direct_newton_solve_from_the_straight_rod():
     """No continuation: Newton alone from the straight rod converges at P L^2/EI = 10."""
     fast = tip_load(-5e-4, "solver.continuation=never").solve()
-    assert fast.converged and fast.status == "Newton"
+    assert fast.converged and fast.result.algorithm == "Newton"
     assert np.max(np.abs(fast.tip_position - tip_load(-5e-4).solve().tip_position)) < 1e-9
 
 
@@ -72,10 +73,12 @@ def test_newton_failure_falls_back_to_ipopt_and_is_reported():
     same start, and its answer is the one continuation finds (the default path)."""
     sim = tip_load(-2e-3, "solver.continuation=never", "solver.refine=off")
     newton = sim.solver().solve_newton(sim.params, sim.solver().initial_guess(sim.params))
-    assert not newton.converged and "Newton" in newton.status
+    assert not newton.converged and newton.result.algorithm == "Newton"
+    assert newton.status == Status.NO_DESCENT and newton.warnings[0].kind == "not_converged"
     solution = sim.solve()
-    assert solution.status == "Solve_Succeeded" and solution.converged   # IPOPT's answer
-    assert solution.max_residual <= 10 * sim.scenario.solver.tolerance
+    assert solution.result.algorithm == "IPOPT" and solution.converged   # IPOPT's answer
+    assert solution.result.detail == "IPOPT: Solve_Succeeded"
+    assert solution.max_residual <= sim.scenario.solver.tolerance
     continued = tip_load(-2e-3, "solver.refine=off").solve()   # continuation (the default), same mesh
     assert continued.converged
     assert_allclose(solution.tip_position, continued.tip_position, rtol=0, atol=1e-9)

@@ -108,10 +108,10 @@ def test_random_robots_converge_and_balance_or_say_they_failed(seed):
     scenario["solver"] = {"intervals": 32}
     solution = Simulation.from_file(scenario).solve()
     if not solution.converged:
-        assert solution.warnings and solution.warnings[0].startswith("not converged"), solution.warnings
+        assert solution.warnings and solution.warnings[0].kind == "not_converged", solution.warnings
         assert solution.to_dict()["converged"] is False
         return
     balance = solution.balance      # discretisation error only: a missing load would be ~1e-2
     assert balance.force_scale > 0
     assert balance.relative < 1e-6, balance.as_dict()
-    assert not [w for w in solution.warnings if "global balance" in w]
+    assert not [w for w in solution.warning_texts() if "global balance" in w]

@@ -40,6 +40,9 @@ def test_round_trip_from_random_temperatures(bending):
         reached += answer.reachable and answer.position_error <= 1e-4
         assert answer.verification_difference <= 1e-6          # the forward check agrees
         assert answer.forward.converged
+        if answer.reachable:                                    # its optimiser's status says why
+            assert answer.result.success and answer.result.residual <= forward.scenario.solver.tolerance
+            assert answer.result.algorithm == {"ipopt": "IPOPT", "reduced": "least squares (dogbox)"}[inverse.method]
         times.append(answer.solve_time_s)
     assert reached >= 48                                        # >= 95 %
 

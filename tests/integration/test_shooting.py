@@ -77,7 +77,7 @@ def test_shooting_never_reports_a_failure_as_converged(scenarios, monkeypatch):
     sim = Simulation.from_file(scenarios / "analytic" / "tip_load.yaml", method="shooting")
     solution = sim.solve(continuation="never")
     assert not solution.converged
-    assert solution.warnings[0].startswith("not converged")
+    assert solution.warnings[0].kind == "not_converged"
 
 
 def test_check_cli_writes_json_and_exits_by_verdict(tmp_path, scenarios, capsys):
