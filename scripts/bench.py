@@ -225,12 +225,12 @@ def table(rows):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description="tca_casadi speed and accuracy benchmark")
-    parser.add_argument("--quick", action="store_true", help="smoke run: 1 repeat, bending module and elastica")
+    parser.add_argument("--quick", action="store_true", help="smoke run: 1 repeat, the bending module only")
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("-o", "--output", type=Path, default=ROOT / "results" / "bench.json")
     args = parser.parse_args(argv)
     if args.quick:
-        plan = {"bending_module": (1, 11, 1, 2), "elastica": (1, 11, 1, 0)}
+        plan = {"bending_module": (1, 11, 1, 2)}
     else:
         r = args.repeats
         plan = {"bending_module": (r, 101, r, 10), "twisting_module": (r, 101, 1, 10),
@@ -241,7 +241,7 @@ def main(argv=None):
         rows.append(bench_problem(name, PROBLEMS[name](), repeats, steps, shooting_repeats, queries))
     machine = {"date": date.today().isoformat(), "cpus": _cpus(), "python": platform.python_version(),
                "platform": platform.platform()}
-    started = startup(2 if args.quick else 5)
+    started = startup(1 if args.quick else 5)
     checks = check_times(["bending_module"] if args.quick else
                          ["bending_module", "twisting_module", "tendon_robot", "tendon_robot_two_segments",
                           "arm", "arm_pick_and_place", "analytic/pure_moment", "analytic/tip_load",

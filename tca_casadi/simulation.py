@@ -85,7 +85,11 @@ class Simulation:
         if method not in self._solvers:
             if method not in SOLVERS:
                 raise ScenarioError(f"unknown solver method {method!r}; available: {', '.join(SOLVERS)}")
-            self._solvers[method] = SOLVERS[method](self.robot, self.scenario.solver)
+            if method == "collocation":        # built once per structure and process
+                self._solvers[method] = CollocationSolver.shared(
+                    self.robot, self.scenario.solver, self.robot.structure_key(self.scenario))
+            else:
+                self._solvers[method] = SOLVERS[method](self.robot, self.scenario.solver)
         return self._solvers[method]
 
     def solve(self, warm_start=None, method=None, continuation=None, refine=True, warn=True):

@@ -184,7 +184,6 @@ def control(solver, solution, params, refine=True):
     the estimate meets the tolerances. Returns ``(solver, solution, estimate)``: the solver of
     the final mesh (a new one when refined), its solution (with ``accuracy`` set and a warning
     when a tolerance is not met), the :class:`AccuracyEstimate` (None if unavailable)."""
-    from .collocation import CollocationSolver
     options, refinements, previous = solver.options, 0, None
     while True:
         result = estimate(solver, solution, params, solver.higher)
@@ -203,7 +202,7 @@ def control(solver, solution, params, refine=True):
         found.limit_reached = not found.met and any(len(m.intervals) > options.max_intervals for m in meshes)
         if found.met or not refine or options.refine == "off" or refinements >= MAX_ROUNDS or found.limit_reached:
             return solver, _attach(solution, found, refine and options.refine == "auto"), found
-        finer = CollocationSolver(solver.robot, options, meshes=meshes)
+        finer = solver.finer(meshes)
         trial = finer.solve_newton(params, interpolate(solver.nlp, solution.raw["w"], finer.nlp, params))
         if not trial.converged:
             return solver, _attach(solution, found, True), found

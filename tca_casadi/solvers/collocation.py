@@ -2,6 +2,7 @@
 Built once per scenario structure; each :meth:`solve` takes new parameters and a warm start."""
 import logging
 import time
+from collections import OrderedDict
 
 import casadi as ca
 import numpy as np
@@ -14,6 +15,15 @@ from .newton import SquareSystem
 
 log = logging.getLogger(__name__)
 
+#: built solvers kept for reuse, by (scenario name, structure key, meshes, degree); the oldest go
+BUILT_SOLVERS = 6
+_built = OrderedDict()
+
+
+def clear_built_solvers():
+    """Forget every kept solver (e.g. after patching a model function in a test)."""
+    _built.clear()
+
 
 class CollocationSolver:
     """Direct collocation + IPOPT. ``solve(params, initial=None)`` -> :class:`Solution`."""
@@ -24,9 +34,9 @@ class CollocationSolver:
     has_square_system = True
     estimates_error = True
 
-    def __init__(self, robot, options, meshes=None, degree=None):
+    def __init__(self, robot, options, meshes=None, degree=None, structure=None):
         start = time.perf_counter()
-        self.robot, self.options = robot, options
+        self.robot, self.options, self.structure = robot, options, structure
         self.degree = degree or options.degree
         self.nlp = CollocationNLP(robot, options.intervals, self.degree, options.scheme, meshes)
         self._constraints = ca.Function("nlp_g", [self.nlp.w, self.nlp.P], [self.nlp.problem["g"]]).expand()
@@ -39,6 +49,28 @@ class CollocationSolver:
         self.build_time_s = time.perf_counter() - start
         self.solve_count = 0
         log.info("built collocation NLP: %d variables in %.3f s", self.nlp.w.numel(), self.build_time_s)
+
+    @classmethod
+    def shared(cls, robot, options, structure, meshes=None, degree=None):
+        """The solver of this structure, mesh and degree, built once per process and kept (the
+        last :data:`BUILT_SOLVERS`). ``structure``: ``Robot.structure_key`` of the scenario (it
+        holds every non-parameter value, the solver options included); everything a solver
+        bakes in is in it, so two scenarios with the same key and name have the same NLP and
+        differ only in the parameter vector each solve is given."""
+        if structure is None:
+            return cls(robot, options, meshes, degree)
+        key = (robot.name, structure, None if meshes is None else tuple(meshes), degree or options.degree)
+        if key in _built:
+            _built.move_to_end(key)
+            return _built[key]
+        solver = _built[key] = cls(robot, options, meshes, degree, structure)
+        while len(_built) > BUILT_SOLVERS:
+            _built.popitem(last=False)
+        return solver
+
+    def finer(self, meshes):
+        """The solver of the same structure and degree on ``meshes`` (kept like :meth:`shared`)."""
+        return CollocationSolver.shared(self.robot, self.options, self.structure, meshes, self.degree)
 
     def initial_guess(self, params, initial=None):
         """Scaled start point: a previous solution's variables if compatible, else the reference shape."""
@@ -102,7 +134,8 @@ class CollocationSolver:
         """The same NLP at degree d + 1 on the same meshes (built on first use): the reference of
         the error estimate (:mod:`tca_casadi.solvers.accuracy`)."""
         if self._higher is None:
-            self._higher = CollocationSolver(self.robot, self.options, self.nlp.meshes, self.degree + 1)
+            self._higher = CollocationSolver.shared(self.robot, self.options, self.structure,
+                                                    self.nlp.meshes, self.degree + 1)
         return self._higher
 
     @property

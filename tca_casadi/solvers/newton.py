@@ -21,7 +21,7 @@ from .linearisation import Linearisation
 CHORD_CONTRACTION = 0.1
 
 
-class _Buffered:
+class BufferedFunction:
     """A CasADi Function evaluated into preallocated numpy arrays (CasADi's buffer API)."""
 
     def __init__(self, function):
@@ -47,9 +47,9 @@ class SquareSystem:
     def __init__(self, nlp, residual, jacobian):
         self.nlp = nlp
         self._residual_function = residual
-        self._with_jacobian = _Buffered(jacobian)
-        self._residual = _Buffered(residual)
-        self._jacobian_pattern = _Pattern(jacobian.sparsity_out(1))
+        self._with_jacobian = BufferedFunction(jacobian)
+        self._residual = BufferedFunction(residual)
+        self._jacobian_pattern = CscPattern(jacobian.sparsity_out(1))
         self.shape = self._jacobian_pattern.shape
         self._sensitivity = None
 
@@ -121,7 +121,7 @@ class SquareSystem:
             g = self._residual_function(w, P)
             tip = nlp.outputs.expand()(w, P)[1][0:3, -1]
             function = ca.Function("sensitivity", [w, P], [ca.jacobian(g, P), ca.jacobian(tip, w), ca.jacobian(tip, P)])
-            self._sensitivity = (_Buffered(function), [_Pattern(function.sparsity_out(k)) for k in range(3)])
+            self._sensitivity = (BufferedFunction(function), [CscPattern(function.sparsity_out(k)) for k in range(3)])
         return self._sensitivity
 
     def _sensitivities(self, w, P):
@@ -140,7 +140,7 @@ class SquareSystem:
         return Linearisation(g, J_w, J_P, T_w, T_P.toarray())
 
 
-class _Pattern:
+class CscPattern:
     """A CasADi sparsity pattern, to wrap a buffer of nonzeros as a scipy CSC matrix."""
 
     def __init__(self, sparsity):

@@ -36,7 +36,7 @@ from ..model.loads import distributed_fields, is_active
 from ..model.rod import STATE_SIZE, explicit_strain_rate, rod_equations
 from ..model.routes import route_expressions
 from .assemble import build_solution
-from .newton import _Buffered
+from .newton import BufferedFunction
 
 log = logging.getLogger(__name__)
 
@@ -392,11 +392,11 @@ class _SegmentRhs:
         for k, actuator in enumerate(actuators):
             speeds[module.actuators.index(actuator)] = speed[k] / module.length
         f = ca.vertcat(ca.vertcat(kin, dxi) / ca.DM(scale), speeds)
-        self._value = _Buffered(ca.Function("shooting_rhs", [s, y, forces, loads], [ca.densify(f)]))
+        self._value = BufferedFunction(ca.Function("shooting_rhs", [s, y, forces, loads], [ca.densify(f)]))
         S = ca.SX.sym("S", y.numel(), n_unknowns)
         dF = ca.SX.sym("dF", len(actuators), n_unknowns)
         rate = ca.jacobian(f, y) @ S + ca.jacobian(f, forces) @ dF
-        self._augmented = _Buffered(ca.Function("shooting_rhs_variational", [s, ca.vertcat(y, ca.vec(S)), forces,
+        self._augmented = BufferedFunction(ca.Function("shooting_rhs_variational", [s, ca.vertcat(y, ca.vec(S)), forces,
                                                                              ca.vec(dF), loads],
                                                 [ca.densify(ca.vertcat(f, ca.vec(rate)))]))
 

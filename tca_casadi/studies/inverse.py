@@ -34,6 +34,7 @@ from ..errors import ScenarioError
 from ..model.rotations import ROTATION, rotation_angle, rotation_numpy
 from ..scenario.checks import closest
 from ..solvers.continuation import BranchFollower
+from ..solvers.newton import BufferedFunction, CscPattern
 from ..status import SolveStatus, Status
 from .inverse_result import InverseResult, write_path_results  # noqa: F401  (re-exported)
 from .parameters import resolve_parameters
@@ -164,6 +165,8 @@ class InverseStatics:
         self._residuals = ca.Function("residuals", [nlp.w, tau, fixed, target],
                                       [residuals, ca.jacobian(residuals, nlp.w),
                                        ca.jacobian(residuals, tau)]).expand()
+        self._residual_buffer = BufferedFunction(self._residuals)
+        self._residual_patterns = [CscPattern(self._residuals.sparsity_out(k)) for k in (1, 2)]
         self._dP_dtau = np.column_stack([p.vector(robot.layout.size) * (hi - lo)
                                          for p, (lo, hi) in zip(self.parameters, self.bounds)])
 
@@ -294,7 +297,7 @@ class InverseStatics:
         position, R = (np.array(v) for v in self._pose(w, tau, self.sim.params, vector))
         position = position.ravel()
         if not np.isfinite(objective):
-            objective = float(np.sum(np.array(self._residuals(w, tau, self.sim.params, vector)[0]) ** 2))
+            objective = float(np.sum(self.residual_values(w, tau, vector)[0] ** 2))
         return {"w": w, "tau": tau, "result": result, "equilibrium": residual <= tolerance,
                 "objective": objective, "iterations": iterations,
                 "position": position, "R": R, "residual": residual,
@@ -334,6 +337,23 @@ class InverseStatics:
                              forward, difference, elapsed, iterations, tried, message,
                              best["w"], best["tau"], self.method, status)
 
+    def residual_values(self, w, tau, vector):
+        """The least-squares residuals ``r`` (m,), ``dr/dw`` (sparse) and ``dr/dtau`` (m, k) at
+        ``(w, tau)`` for the target ``vector`` (evaluated into buffers)."""
+        r, r_w, r_tau = self._residual_buffer(w, tau, self.sim.params, vector)
+        w_pattern, tau_pattern = self._residual_patterns
+        return r.copy(), w_pattern.matrix(r_w), tau_pattern.matrix(r_tau).toarray()
+
+    def linearisation_at(self, w, params):
+        """The solver's linearisation at ``(w, params)``, kept for the last few points asked
+        (the starts are the same for every query: their linearisations are computed once)."""
+        key = (np.asarray(w, float).tobytes(), np.asarray(params, float).tobytes())
+        if key not in self._start_linearisation:
+            if len(self._start_linearisation) >= 8:
+                self._start_linearisation.pop(next(iter(self._start_linearisation)))
+            self._start_linearisation[key] = self.solver.linearise(w, params)
+        return self._start_linearisation[key]
+
     def _verify(self, best, target):
         """Independent forward solve at the answer's temperatures: predictor-corrector
         continuation from the first start's forward equilibrium (not from the answer's state),
@@ -343,10 +363,7 @@ class InverseStatics:
         forward = None
         if start.converged:
             follower = BranchFollower(self.solver, start.parameters, params - start.parameters)
-            key = start.parameters.tobytes()           # the same start for every query
-            if key not in self._start_linearisation:
-                self._start_linearisation = {key: self.solver.linearise(start.raw["w"], start.parameters)}
-            first = follower.point(0.0, start, linearisation=self._start_linearisation[key])
+            first = follower.point(0.0, start, linearisation=self.linearisation_at(start.raw["w"], start.parameters))
             point, _, _, failure = follower.advance(first, 1.0, 1.0, 1.0, 1e-3)
             forward = None if failure is not None else point.solution
         if forward is None:

@@ -50,7 +50,6 @@ def reduced_attempt(inverse, w0, tau0, vector):
     """Minimise from ``(w0, tau0)``. Returns ``(w, tau, failure, iterations, detail)``;
     ``failure`` is None (least squares converged on equilibria throughout) or a :class:`Status`."""
     equilibria = _Equilibria(inverse, w0, tau0)
-    fixed = inverse.sim.params
     size = int(inverse._residuals.size1_out(0))
 
     def residuals(tau):
@@ -58,20 +57,21 @@ def reduced_attempt(inverse, w0, tau0, vector):
         if w is None:                                   # no equilibrium reached: a bad trial point
             equilibria.failed = True
             return np.full(size, 1e6)
-        return np.array(inverse._residuals(w, tau, fixed, vector)[0]).ravel()
+        return inverse.residual_values(w, tau, vector)[0]
 
     def jacobian(tau):
         w = equilibria(tau)
         if w is None:
             return np.zeros((size, len(tau)))
-        linear = inverse.solver.linearise(w, inverse.params_at(tau))
+        start = np.array_equal(tau, tau0)                 # a start point: the same for every query
+        linear = (inverse.linearisation_at if start else inverse.solver.linearise)(w, inverse.params_at(tau))
         rate = linear.state_derivative(inverse._dP_dtau)                  # (n, k)
         equilibria.rate, equilibria.lu = rate, linear.lu
-        _, r_w, r_tau = inverse._residuals(w, tau, fixed, vector)
-        return r_w.sparse() @ rate + np.array(r_tau)
+        _, r_w, r_tau = inverse.residual_values(w, tau, vector)
+        return r_w @ rate + r_tau
 
     result = least_squares(residuals, np.clip(tau0, 0.0, 1.0), jac=jacobian, bounds=(0.0, 1.0),
-                           method="dogbox", x_scale=1.0, xtol=1e-10, ftol=1e-10, gtol=1e-10,
+                           method="dogbox", x_scale=1.0, xtol=1e-8, ftol=1e-8, gtol=1e-8,
                            max_nfev=200)
     tau = np.clip(result.x, 0.0, 1.0)
     w = equilibria(tau)

@@ -11,15 +11,16 @@ from tca_casadi import Simulation
 
 
 def _reference(scenario):
-    """The tip on a much finer mesh (the solver options of ``scenario`` replaced), computed once
-    per robot."""
+    """The tip on a much finer mesh (the solver options of ``scenario`` replaced; 32 intervals
+    of degree 5 agree with 64 to 1e-13 m on seed 22), computed once per robot, without an
+    error estimate of its own."""
     return _reference_tip(json.dumps(dict(scenario, solver={})))
 
 
 @functools.lru_cache(maxsize=4)
 def _reference_tip(text):
-    fine = dict(json.loads(text), solver={"intervals": 64, "degree": 5, "refine": "off"})
-    solution = Simulation.from_file(fine).solve()
+    fine = Simulation.from_file(dict(json.loads(text), solver={"intervals": 32, "degree": 5, "refine": "off"}))
+    solution = fine.continue_from_rest(fine.solver())
     assert solution.converged
     return solution.tip_position
 

@@ -30,16 +30,17 @@ def complete(path):
     return True
 
 
-def _kill_runs(command, directory, seed, runs=4):
-    """Start ``command`` ``runs`` times, killing it (SIGKILL) at random moments; after each, every
-    visible file in ``directory`` must be complete."""
+def _kill_runs(command, directory, seed, runs=3):
+    """Start ``command`` ``runs`` times, killing it (SIGKILL) at random moments of its second
+    half (where the files are written; before, nothing is open); after each, every visible file
+    in ``directory`` must be complete."""
     rng = np.random.default_rng(seed)
     subprocess.run(command, check=True, capture_output=True)        # a first complete run
     first = {p.name for p in directory.iterdir() if not p.name.startswith(".")}
     started = time.perf_counter()
     subprocess.run(command, check=True, capture_output=True)
     duration = time.perf_counter() - started
-    for moment in rng.uniform(0.3 * duration, 1.05 * duration, runs):
+    for moment in rng.uniform(0.5 * duration, 1.05 * duration, runs):
         process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         time.sleep(moment)
         process.send_signal(signal.SIGKILL)

@@ -165,3 +165,32 @@ def test_sweep_over_a_modulus_runs_on_the_built_nlp(scenarios):
         fresh = Simulation.from_file(scenarios / "bending_module.yaml",
                                      [f"materials.ecoflex30.youngs_modulus={youngs!r}"]).solve()
         _compare(point.solution, fresh)
+
+
+def test_a_built_solver_is_reused_only_for_the_same_structure():
+    """Simulations of one structure share the built NLP (parameters differ freely, the answers
+    equal a fresh build's); another name, mesh or length gets its own."""
+    from tca_casadi.solvers.collocation import clear_built_solvers
+    scenario = random_robot(3)
+    first = Simulation.from_file(scenario)
+    refine_off = Simulation.from_file(scenario, ["solver.refine=off"])    # a solver option: structure
+    assert first.solver() is Simulation.from_file(scenario).solver()
+    assert refine_off.solver() is not first.solver()
+    renamed = Simulation.from_file(dict(scenario, name="other"))
+    assert renamed.solver() is not first.solver()
+    name = first.robot.layout.names()[0]
+    module = first.robot.modules[0].name
+    changed = Simulation.from_file(scenario, [f"{module}.length={first.robot.modules[0].length * 1.1}"])
+    assert changed.solver() is not first.solver()
+    moved = Simulation.from_file(scenario)
+    value = np.atleast_1d(moved.get_parameter(name))
+    moved.set_parameter(name, value * 1.05 if np.any(value) else value + 0.01)
+    shared = moved.solve(warn=False)
+    assert moved.solver() is first.solver() or shared.accuracy.refinements > 0
+    clear_built_solvers()
+    fresh = Simulation.from_file(scenario)
+    fresh.set_parameter(name, moved.get_parameter(name))
+    alone = fresh.solve(warn=False)
+    assert shared.converged and alone.converged
+    assert_allclose(shared.tip_position, alone.tip_position, rtol=0, atol=1e-12)
+    assert shared.scenario_name == alone.scenario_name == scenario["name"]
