@@ -113,7 +113,9 @@ def build_parser():
 
 
 def main(argv=None):
-    """Run one command; the exit code (0, 1, 2, or 130 when interrupted)."""
+    """Run one command; the exit code (0, 1, 2, or 130 when interrupted). Run as the program
+    (``argv`` None), an interrupt ends the process at once with status 130 (see
+    :func:`_exit_interrupted`)."""
     try:
         args = build_parser().parse_args(argv)
         logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
@@ -127,7 +129,21 @@ def main(argv=None):
         return 1
     except KeyboardInterrupt:
         print("interrupted (files already written are complete)", file=sys.stderr)
+        if argv is None:
+            _exit_interrupted()
         return 130
+
+
+def _exit_interrupted():
+    """Exit with status 130 now. A Ctrl-C that lands during some extension imports (seen during
+    casadi's, about 0.8 s after start) leaves CPython 3.11 treating the interrupt as unhandled
+    even though we caught it: at exit it kills itself with SIGINT (status -2, not 130).
+    ``os._exit`` after flushing avoids that; result files are written atomically, so nothing is
+    left half-written."""
+    import os
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(130)
 
 
 def _validate(args):
@@ -147,7 +163,20 @@ def _validate(args):
         value = np.atleast_1d(robot.values[robot.layout[name]])
         text = f"{value[0]:.6g}" if value.size == 1 else "[" + ", ".join(f"{v:.6g}" for v in value) + "]"
         print(f"  {name:<44} {text} {UNIT_OF[robot.layout.kind(name)]}")
+    _print_thermal(scenario, robot)
     return 0
+
+
+def _print_thermal(scenario, robot):
+    """Each TCA's lumped thermal model (heat capacity, conductance, time constant)."""
+    from .model.thermal import thermal_law
+    if robot.tcas:
+        print(f"thermal (ambient {scenario.ambient_temperature:g} degC):")
+    for actuator in robot.tcas:
+        law = thermal_law(scenario.tca_types[actuator.tca_type], actuator.law.fiber_length)
+        resistance = "" if law.resistance != law.resistance else f", R0 {law.resistance:.4g} ohm"
+        print(f"  {actuator.key:<28} C {law.heat_capacity:.4g} J/K, G {law.conductance:.4g} W/K, "
+              f"tau {law.time_constant:.3g} s{resistance}")
 
 
 def _solve(args):

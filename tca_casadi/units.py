@@ -30,6 +30,12 @@ KINDS = {
     "compliance": ("1/N", "a compliance (strain per newton)"),
     "pressure_per_force2": ("Pa/N^2", "a modulus per force squared"),
     "dimensionless": ("", "a plain number"),
+    "heat_capacity": ("J/K", "a heat capacity"),
+    "thermal_conductance": ("W/K", "a thermal conductance"),
+    "specific_heat": ("J/(kg*K)", "a specific heat"),
+    "heat_transfer_coefficient": ("W/(m^2*K)", "a heat transfer coefficient"),
+    "resistance": ("ohm", "an electrical resistance"),
+    "per_kelvin": ("1/K", "a temperature coefficient"),
     "untwist_c2": ("", "an untwist coefficient in rad/(m degC^2) (a plain number)"),
     "untwist_c1": ("", "an untwist coefficient in rad/(m degC) (a plain number)"),
     "untwist_c0": ("", "an untwist coefficient in rad/m (a plain number)"),
@@ -40,7 +46,9 @@ UNIT_OF = {"temperature": "degC", "force": "N", "moment": "N m", "mass": "kg", "
            "length": "m", "angle": "rad", "pressure": "Pa", "density": "kg/m^3", "force_per_length": "N/m",
            "moment_per_length": "N m/m", "pressure_per_force": "Pa/N", "pressure_per_force2": "Pa/N^2",
            "untwist_c2": "rad/(m degC^2)", "untwist_c1": "rad/(m degC)", "untwist_c0": "rad/m",
-           "dimensionless": "-"}
+           "dimensionless": "-", "heat_capacity": "J/K", "thermal_conductance": "W/K",
+           "specific_heat": "J/(kg K)", "heat_transfer_coefficient": "W/(m^2 K)", "resistance": "ohm",
+           "per_kelvin": "1/K"}
 
 _NUMBER_AND_UNIT = re.compile(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*)", re.DOTALL)
 

@@ -35,7 +35,9 @@ from dataclasses import dataclass
 import numpy as np
 
 #: keys of the scenario that are neither parameters nor structure (they never change a solve)
-IGNORED = (("name",), ("description",), ("inverse",), ("sequence",))
+IGNORED = (("name",), ("description",), ("inverse",), ("sequence",), ("ambient_temperature",))
+#: keys of each TCA type that the statics never read (the thermal model's)
+TCA_THERMAL = ("thermal", "resistance", "resistance_temperature_coefficient")
 #: keys of each grasped object that only drawings use
 OBJECT_DRAWING = ("position", "yaw", "size")
 
@@ -92,6 +94,9 @@ class ParameterLayout:
         for item in data.get("objects", []):
             for key in OBJECT_DRAWING:
                 item.pop(key, None)
+        for tca_type in data.get("tca_types", {}).values():
+            for key in TCA_THERMAL:
+                tca_type.pop(key, None)
         return data
 
 

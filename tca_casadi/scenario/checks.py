@@ -1,11 +1,11 @@
 """Checks that need the whole scenario: names unique and resolvable, spans and load positions
 inside their module. Each failure is one line naming file, line and key path."""
 from ..errors import ScenarioError
+from .schema import Scenario
 from .sources import did_you_mean, format_path
 
 #: top-level keys; module and load names must differ from them so dotted paths stay unambiguous
-RESERVED = ("name", "description", "gravity", "base", "materials", "tca_types", "modules",
-            "loads", "objects", "solver", "inverse", "sequence")
+RESERVED = tuple(Scenario.model_fields)
 
 
 def fail(raw, sources, path, message):

@@ -125,6 +125,19 @@ class ShearModulusFit(Strict):
     a0: Annotated[float, _quantity("pressure"), Field(gt=0)] = 0.85e6
 
 
+class TcaThermal(Strict):
+    """The lumped thermal model of a TCA type (:mod:`tca_casadi.model.thermal`): ``heat_capacity``
+    [J/K] and ``conductance`` [W/K] given, or derived from the fibre's geometry with ``density``,
+    ``specific_heat``, ``convection_coefficient`` and ``area_factor`` (the exposed fraction of
+    the fibre's lateral surface). Defaults: nylon 6,6 in still air."""
+    heat_capacity: Optional[Annotated[float, _quantity("heat_capacity"), Field(gt=0)]] = None
+    conductance: Optional[Annotated[float, _quantity("thermal_conductance"), Field(gt=0)]] = None
+    density: Annotated[float, _quantity("density"), Field(gt=0)] = 1140.0
+    specific_heat: Annotated[float, _quantity("specific_heat"), Field(gt=0)] = 1700.0
+    convection_coefficient: Annotated[float, _quantity("heat_transfer_coefficient"), Field(gt=0)] = 25.0
+    area_factor: Annotated[float, _quantity("dimensionless"), Field(gt=0, le=1)] = 1.0
+
+
 class TcaType(Strict):
     """Geometry and thermo-mechanical law of a TCA (SPEC section 4); defaults are the paper's."""
     fiber_radius: PositiveLength
@@ -138,6 +151,10 @@ class TcaType(Strict):
     max_temperature: Temperature = 150.0
     untwist: UntwistFit = Field(default_factory=UntwistFit)
     shear_modulus: ShearModulusFit = Field(default_factory=ShearModulusFit)
+    thermal: TcaThermal = Field(default_factory=TcaThermal)
+    #: electrical resistance at reference_temperature [ohm] (needed by voltage and current drives)
+    resistance: Optional[Annotated[float, _quantity("resistance"), Field(gt=0)]] = None
+    resistance_temperature_coefficient: Annotated[float, _quantity("per_kelvin")] = 0.0
 
     @model_validator(mode="after")
     def _geometry(self):
@@ -433,6 +450,8 @@ class Scenario(Strict):
     name: str = "scenario"
     description: str = ""
     gravity: Vector3Acceleration = (0.0, 0.0, -9.81)
+    #: the air (or body) the TCAs exchange heat with [degC]
+    ambient_temperature: Temperature = 25.0
     base: Base = Field(default_factory=Base)
     materials: dict[str, Material]
     tca_types: dict[str, TcaType] = Field(default_factory=dict)
