@@ -1,0 +1,111 @@
+"""Time integration of the TCAs' lumped thermal model (:mod:`tca_casadi.model.thermal`).
+
+The state is every TCA's temperature plus two energy integrals, ``E_in = int P dt`` and
+``E_out = int G (T - T_amb) dt`` [J], so that the heat balance
+``E_in = sum C (T_end - T_0) + E_out`` can be checked on every run. The drives are piecewise
+linear in time; the integrator (scipy's ``solve_ivp``, DOP853 with tight tolerances) never steps
+across one of their breakpoints: each piece is integrated on its own, so a step in a drive lands
+exactly where it is scheduled.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """A value [SI] that is piecewise linear in time: ``values[k]`` at ``times[k]`` [s], held
+    before the first and after the last time. A step is two points at the same time (the value
+    after the step is the later one)."""
+    times: tuple
+    values: tuple
+
+    @classmethod
+    def constant(cls, value):
+        return cls((0.0,), (float(value),))
+
+    def __call__(self, t, left=False):
+        """The value at ``t`` [s]; at a step, the value after it (``left``: before it)."""
+        times, values = np.asarray(self.times, float), np.asarray(self.values, float)
+        after = np.searchsorted(times, t, side="left" if left else "right")
+        if after == 0:
+            return float(values[0])
+        if after == len(times):
+            return float(values[-1])
+        t0, t1 = times[after - 1], times[after]
+        v0, v1 = values[after - 1], values[after]
+        return float(v0 + (v1 - v0) * (t - t0) / (t1 - t0))
+
+    @property
+    def breakpoints(self):
+        return tuple(sorted(set(float(t) for t in self.times)))
+
+
+@dataclass(frozen=True)
+class Drive:
+    """How one TCA is heated: ``kind`` ``power`` [W], ``voltage`` [V] or ``current`` [A], and
+    its :class:`Schedule`."""
+    kind: str
+    schedule: Schedule
+
+
+@dataclass
+class ThermalHistory:
+    """Temperatures and powers at the output times (n,); arrays are (n, number of TCAs)."""
+    t: np.ndarray
+    temperature: np.ndarray     # [degC]
+    power: np.ndarray           # [W]
+    energy_in: np.ndarray       # int P dt from t[0], summed over the TCAs [J]
+    energy_lost: np.ndarray     # int G (T - T_amb) dt from t[0], summed [J]
+    heat_capacity: np.ndarray   # (number of TCAs,) [J/K]
+
+    def heat_balance_residual(self):
+        """``E_in - sum C (T - T_0) - E_lost`` at every output time [J] (zero up to the
+        integrator's error)."""
+        stored = (self.temperature - self.temperature[0]) @ self.heat_capacity
+        return self.energy_in - stored - self.energy_lost
+
+
+def integrate(laws, drives, ambient, initial, outputs, rtol=1e-11, atol=1e-11):
+    """Integrate ``C dT/dt = P(t, T) - G (T - T_amb)`` for each TCA (``laws``:
+    :class:`ThermalLaw` s, ``drives``: :class:`Drive` s, ``initial`` temperatures [degC]) and
+    report at the increasing ``outputs`` [s] (the first is the start). Returns a
+    :class:`ThermalHistory`."""
+    outputs = np.asarray(outputs, float)
+    count = len(laws)
+    capacity = np.array([law.heat_capacity for law in laws])
+
+    conductance = np.array([law.conductance for law in laws])
+
+    def powers(t, temperature, left=False):
+        return np.array([float(law.power(d.kind, d.schedule(t, left), T))
+                         for law, d, T in zip(laws, drives, temperature)])
+
+    def rhs_from(start):
+        """The right-hand side on a piece starting at ``start``: drives take their values from
+        inside the piece (the limit from the left at its end), never the next piece's."""
+        def rhs(t, y):
+            temperature = y[:count]
+            power = powers(t, temperature, left=t > start)
+            lost = conductance * (temperature - ambient)
+            return np.concatenate([(power - lost) / capacity, [power.sum(), lost.sum()]])
+        return rhs
+
+    cuts = sorted({b for d in drives for b in d.schedule.breakpoints if outputs[0] < b < outputs[-1]})
+    edges = [outputs[0], *cuts, outputs[-1]]
+    y = np.concatenate([np.asarray(initial, float), [0.0, 0.0]])
+    states = np.empty((outputs.size, count + 2))
+    states[0] = y
+    for start, end in zip(edges[:-1], edges[1:]):
+        inside = (outputs > start) & (outputs <= end)
+        times = np.union1d(outputs[inside], [end])
+        solution = solve_ivp(rhs_from(start), (start, end), y, method="DOP853", t_eval=times, rtol=rtol, atol=atol)
+        if not solution.success:
+            raise RuntimeError(f"thermal integration failed between {start:g} s and {end:g} s: {solution.message}")
+        states[inside] = solution.y.T[np.isin(times, outputs[inside])]
+        y = solution.y[:, -1]
+    temperature = states[:, :count]
+    power = np.array([powers(t, T) for t, T in zip(outputs, temperature)])
+    return ThermalHistory(outputs, temperature, power, states[:, count], states[:, count + 1], capacity)
+

@@ -1,0 +1,46 @@
+"""The thermal integrator against closed forms: a power step landing at its time, a linear
+ramp, a voltage step's steady state with R(T), the heat balance."""
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from tca_casadi.model.thermal import ThermalLaw
+from tca_casadi.solvers.thermal import Drive, Schedule, integrate
+
+LAW = ThermalLaw(heat_capacity=0.137, conductance=0.00707, resistance=12.0, resistance_coefficient=0.0)
+AMBIENT = 25.0
+
+
+def test_a_power_step_lands_at_its_time_and_follows_the_exponential():
+    P, t_step = 0.3, 2.0
+    outputs = np.linspace(0.0, 60.0, 601)
+    history = integrate([LAW], [Drive("power", Schedule((0.0, t_step, t_step), (0.0, 0.0, P)))],
+                        AMBIENT, [AMBIENT], outputs)
+    after = np.clip(outputs - t_step, 0.0, None)
+    rise = P / LAW.conductance
+    expected = AMBIENT + rise * (1.0 - np.exp(-after / LAW.time_constant))
+    assert_allclose(history.temperature[:, 0], expected, rtol=0, atol=1e-6 * rise)
+    assert np.all(history.temperature[outputs <= t_step, 0] == AMBIENT)     # nothing before the step
+    assert_allclose(history.power[:, 0], np.where(outputs >= t_step, P, 0.0), rtol=0, atol=0)
+
+
+def test_a_linear_ramp():
+    k, tau, G = 0.01, LAW.time_constant, LAW.conductance          # P = k t [W]
+    outputs = np.linspace(0.0, 30.0, 301)
+    history = integrate([LAW], [Drive("power", Schedule((0.0, 30.0), (0.0, 30.0 * k)))], AMBIENT, [AMBIENT], outputs)
+    expected = AMBIENT + (k / G) * (outputs - tau * (1.0 - np.exp(-outputs / tau)))
+    assert_allclose(history.temperature[:, 0], expected, rtol=0, atol=1e-6 * (expected[-1] - AMBIENT))
+    assert_allclose(history.power[:, 0], k * outputs, rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("alpha", [0.0, 4e-3])
+def test_voltage_step_reaches_the_closed_form_steady_state_and_balances_heat(alpha):
+    law = ThermalLaw(0.137, 0.00707, resistance=12.0, resistance_coefficient=alpha, reference_temperature=25.0)
+    outputs = np.linspace(0.0, 30 * law.time_constant, 401)
+    history = integrate([law, LAW], [Drive("voltage", Schedule.constant(2.0)), Drive("power", Schedule.constant(0.1))],
+                        AMBIENT, [AMBIENT, 40.0], outputs)
+    steady = law.steady_temperature("voltage", 2.0, AMBIENT)
+    assert_allclose(history.temperature[-1, 0], steady, rtol=1e-8, atol=0)
+    assert_allclose(history.temperature[-1, 1], LAW.steady_temperature("power", 0.1, AMBIENT), rtol=1e-8, atol=0)
+    balance = history.heat_balance_residual()
+    assert np.max(np.abs(balance)) <= 1e-6 * history.energy_in[-1]
