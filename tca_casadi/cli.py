@@ -1,4 +1,4 @@
-"""Command line: ``tca-casadi validate|solve|check|sweep|inverse|sequence SCENARIO ...``.
+"""Command line: ``tca-casadi validate|solve|check|sweep|inverse|sequence|simulate SCENARIO ...``.
 
 Exit codes: 0 success, 1 the solver did not converge (``check``: the solvers disagree),
 2 bad input (one line on stderr). ``sweep``: 1 when the run stopped before the stop value;
@@ -109,6 +109,16 @@ def build_parser():
                           help="also solve every step by shooting and compare (as `check` does); "
                                "writes sequence_check.json")
     sequence.add_argument("--quiet", action="store_true", help="no progress bars")
+
+    simulate = commands.add_parser("simulate", help="run the scenario's timeline in time: heated TCAs, the shape "
+                                   "at every output time; timeseries.csv, simulation.json, timeseries.png")
+    _scenario_arguments(simulate)
+    simulate.add_argument("-o", "--output", type=Path, default=None,
+                          help="output directory (default: results/<scenario name>/simulate)")
+    simulate.add_argument("--duration", default=None, help="[s] (units allowed: '30 s'); default the scenario's")
+    simulate.add_argument("--dt", default="0.1", help="output step [s] (default 0.1)")
+    simulate.add_argument("--no-plot", action="store_true", help="no timeseries.png")
+    simulate.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser
 
 
@@ -325,8 +335,32 @@ def _with_progress(run, label, quiet=False):
         return run(progress=lambda fraction, text: bar.update(task, completed=fraction, description=text))
 
 
+def _simulate(args):
+    from .simulation import Simulation
+    from .studies.timeline import TimeSimulation
+    from .units import to_si
+    sim = Simulation.from_file(Path(args.scenario), args.overrides)
+    try:
+        duration = None if args.duration is None else to_si(args.duration, "time")
+        dt = to_si(args.dt, "time")
+    except ValueError as exc:
+        raise ScenarioError(f"--duration/--dt: {exc}") from None
+    timed = TimeSimulation(sim, duration=duration, dt=dt)
+    plots = ["timeseries.png"]
+    output = prepare_directory(args.output or default_directory(sim.scenario.name, "simulate"),
+                               ["timeseries.csv", "simulation.json"] + plots, stale=plots if args.no_plot else [])
+    series = _with_progress(timed.run, "simulate", quiet=args.quiet)
+    written = [series.to_csv(output / "timeseries.csv"), write_json(output / "simulation.json", timed.report(series))]
+    if not args.no_plot:
+        from .plotting.timeseries import save_timeseries_png
+        written.append(save_timeseries_png(series, output / "timeseries.png", [e.at for e in sim.scenario.timeline]))
+    print(timed.summary(series))
+    print("wrote " + ", ".join(str(p) for p in written))
+    return 0 if series.completed else 1
+
+
 COMMANDS = {"validate": _validate, "solve": _solve, "check": _check, "sweep": _sweep,
-            "inverse": _inverse, "sequence": _sequence}
+            "inverse": _inverse, "sequence": _sequence, "simulate": _simulate}
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -35,7 +35,8 @@ from dataclasses import dataclass
 import numpy as np
 
 #: keys of the scenario that are neither parameters nor structure (they never change a solve)
-IGNORED = (("name",), ("description",), ("inverse",), ("sequence",), ("ambient_temperature",))
+IGNORED = (("name",), ("description",), ("inverse",), ("sequence",), ("ambient_temperature",),
+           ("duration",), ("timeline",))
 #: keys of each TCA type that the statics never read (the thermal model's)
 TCA_THERMAL = ("thermal", "resistance", "resistance_temperature_coefficient")
 #: keys of each grasped object that only drawings use
@@ -97,6 +98,9 @@ class ParameterLayout:
         for tca_type in data.get("tca_types", {}).values():
             for key in TCA_THERMAL:
                 tca_type.pop(key, None)
+        for module in data.get("modules", []):
+            for actuator in module.get("actuators", []):
+                actuator.pop("drive", None)            # simulate's, never the statics'
         return data
 
 

@@ -281,7 +281,8 @@ class Robot:
 
     def problems(self, params):
         """What is physically impossible at ``params`` (a list of messages, empty if none):
-        moduli or TCA sizes out of range, a route outside the body. Checked by sweeps and
+        moduli or TCA sizes out of range, a TCA temperature outside its law's range, a route
+        outside the body. Checked by sweeps and
         inverse statics, which move parameters without validating a scenario."""
         param, out = self.param_function(params), []
         for module in self.modules:
@@ -300,6 +301,11 @@ class Robot:
                     out.append(f"{actuator.key}: pitch_angle {law.pitch_angle:g} rad is outside (0, pi/2)")
                 if not law.shear_coefficients[2] > 0:
                     out.append(f"{actuator.key}: shear_modulus.a0 must be positive")
+                temperature = float(param(actuator.parameter)[0])
+                if not law.min_temperature <= temperature <= law.max_temperature:
+                    out.append(f"{actuator.key} at {temperature:.6g} degC is outside its TCA type's range "
+                               f"({law.min_temperature:g} to {law.max_temperature:g} degC, the range its law is "
+                               "validated for)")
             if actuator.placement_keys:
                 radius = actuator.placement_of(param)[0]
                 if radius < 0 or (radius == 0 and actuator.route.kind == "helix"):

@@ -37,6 +37,25 @@ def check_references(scenario, raw, sources):
             if holder not in module_names:
                 fail(raw, sources, ("objects", index, "held_by", k),
                      f"unknown module {holder!r}{closest(holder, module_names)}")
+    _check_timeline(scenario, raw, sources)
+
+
+def _check_timeline(scenario, raw, sources):
+    """Events in time order, inside ``duration``, each ramp over before the next event."""
+    events = scenario.timeline
+    for k, event in enumerate(events):
+        if scenario.duration is not None and event.at > scenario.duration:
+            fail(raw, sources, ("timeline", k, "at"),
+                 f"event at {event.at:g} s is after the duration ({scenario.duration:g} s)")
+        if k and event.at < events[k - 1].at:
+            fail(raw, sources, ("timeline", k, "at"),
+                 f"event at {event.at:g} s comes before the previous one ({events[k - 1].at:g} s): events must be in time order")
+        if event.ramp is not None:
+            end = events[k + 1].at if k + 1 < len(events) else scenario.duration
+            if end is not None and event.at + event.ramp > end + 1e-12:
+                what = "the next event" if k + 1 < len(events) else "the duration"
+                fail(raw, sources, ("timeline", k, "ramp"),
+                     f"ramp of {event.ramp:g} s from {event.at:g} s ends after {what} ({end:g} s)")
 
 
 def _unique_names(items, path, raw, sources):

@@ -245,14 +245,35 @@ Route = Annotated[Union[Straight, Helix, Curve], Field(discriminator="kind")]
 
 
 # ----------------------------------------------------------------------------- actuators
+#: a drive's kind -> the unit kind of its value
+DRIVE_UNITS = {"power": "power", "voltage": "voltage", "current": "current", "temperature": "temperature"}
+
+
+class TcaDrive(Strict):
+    """How a TCA is heated in ``tca-casadi simulate``: ``kind`` ``power`` [W], ``voltage`` [V],
+    ``current`` [A] or ``temperature`` [degC] (the temperature is set directly, as in
+    ``solve``), and its ``value``."""
+    kind: Literal["power", "voltage", "current", "temperature"]
+    value: Union[float, str] = 0.0
+
+    @model_validator(mode="after")
+    def _value_in_its_unit(self):
+        self.value = to_si(self.value, DRIVE_UNITS[self.kind])
+        if self.kind != "temperature" and self.value < 0:
+            raise ValueError(f"a {self.kind} drive's value must not be negative (got {self.value:g})")
+        return self
+
+
 class Tca(Strict):
-    """A TCA: tension unknown, fixed by the TCA law at ``temperature`` [degC]."""
+    """A TCA: tension unknown, fixed by the TCA law at ``temperature`` [degC]; ``drive``: how
+    ``simulate`` heats it (default: its temperature, as given)."""
     name: str = Field(min_length=1)
     kind: Literal["tca"]
     type: str
     route: Route
     temperature: Temperature = 25.0
     tension_only: bool = False
+    drive: Optional[TcaDrive] = None
 
 
 class Tendon(Strict):
@@ -445,6 +466,17 @@ class SequenceStep(Strict):
     set: dict[str, object] = Field(default_factory=dict)
 
 
+Time = Annotated[float, _quantity("time"), Field(ge=0)]
+
+
+class TimelineEvent(Strict):
+    """At time ``at`` [s], set values by dotted path (drive values, temperatures, tensions,
+    loads, ...), at once or linearly over ``ramp`` [s]."""
+    at: Time
+    set: dict[str, object] = Field(default_factory=dict)
+    ramp: Optional[Annotated[float, _quantity("time"), Field(gt=0)]] = None
+
+
 class Scenario(Strict):
     """A whole robot: modules in series from a base, loads, gravity and solver options."""
     name: str = "scenario"
@@ -461,5 +493,8 @@ class Scenario(Strict):
     solver: SolverOptions = Field(default_factory=SolverOptions)
     inverse: Optional[InverseOptions] = None
     sequence: Optional[list[SequenceStep]] = None
+    #: ``simulate``: how long [s], and the events on the way
+    duration: Optional[Annotated[float, _quantity("time"), Field(gt=0)]] = None
+    timeline: list[TimelineEvent] = Field(default_factory=list)
     _raw: Optional[dict] = PrivateAttr(default=None)
     _sources: object = PrivateAttr(default=None)

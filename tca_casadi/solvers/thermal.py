@@ -1,8 +1,8 @@
 """Time integration of the TCAs' lumped thermal model (:mod:`tca_casadi.model.thermal`).
 
-The state is every TCA's temperature plus two energy integrals, ``E_in = int P dt`` and
+The state is every TCA's temperature plus two energy integrals per TCA, ``E_in = int P dt`` and
 ``E_out = int G (T - T_amb) dt`` [J], so that the heat balance
-``E_in = sum C (T_end - T_0) + E_out`` can be checked on every run. The drives are piecewise
+``E_in = C (T_end - T_0) + E_out`` can be checked on every run. The drives are piecewise
 linear in time; the integrator (scipy's ``solve_ivp``, DOP853 with tight tolerances) never steps
 across one of their breakpoints: each piece is integrated on its own, so a step in a drive lands
 exactly where it is scheduled.
@@ -56,14 +56,14 @@ class ThermalHistory:
     t: np.ndarray
     temperature: np.ndarray     # [degC]
     power: np.ndarray           # [W]
-    energy_in: np.ndarray       # int P dt from t[0], summed over the TCAs [J]
-    energy_lost: np.ndarray     # int G (T - T_amb) dt from t[0], summed [J]
+    energy_in: np.ndarray       # int P dt from t[0], per TCA [J]
+    energy_lost: np.ndarray     # int G (T - T_amb) dt from t[0], per TCA [J]
     heat_capacity: np.ndarray   # (number of TCAs,) [J/K]
 
     def heat_balance_residual(self):
-        """``E_in - sum C (T - T_0) - E_lost`` at every output time [J] (zero up to the
-        integrator's error)."""
-        stored = (self.temperature - self.temperature[0]) @ self.heat_capacity
+        """``E_in - C (T - T_0) - E_lost`` per TCA at every output time [J], (n, number of
+        TCAs) (zero up to the integrator's error)."""
+        stored = (self.temperature - self.temperature[0]) * self.heat_capacity
         return self.energy_in - stored - self.energy_lost
 
 
@@ -89,13 +89,13 @@ def integrate(laws, drives, ambient, initial, outputs, rtol=1e-11, atol=1e-11):
             temperature = y[:count]
             power = powers(t, temperature, left=t > start)
             lost = conductance * (temperature - ambient)
-            return np.concatenate([(power - lost) / capacity, [power.sum(), lost.sum()]])
+            return np.concatenate([(power - lost) / capacity, power, lost])
         return rhs
 
     cuts = sorted({b for d in drives for b in d.schedule.breakpoints if outputs[0] < b < outputs[-1]})
     edges = [outputs[0], *cuts, outputs[-1]]
-    y = np.concatenate([np.asarray(initial, float), [0.0, 0.0]])
-    states = np.empty((outputs.size, count + 2))
+    y = np.concatenate([np.asarray(initial, float), np.zeros(2 * count)])
+    states = np.empty((outputs.size, 3 * count))
     states[0] = y
     for start, end in zip(edges[:-1], edges[1:]):
         inside = (outputs > start) & (outputs <= end)
@@ -107,5 +107,5 @@ def integrate(laws, drives, ambient, initial, outputs, rtol=1e-11, atol=1e-11):
         y = solution.y[:, -1]
     temperature = states[:, :count]
     power = np.array([powers(t, T) for t, T in zip(outputs, temperature)])
-    return ThermalHistory(outputs, temperature, power, states[:, count], states[:, count + 1], capacity)
+    return ThermalHistory(outputs, temperature, power, states[:, count:2 * count], states[:, 2 * count:], capacity)
 

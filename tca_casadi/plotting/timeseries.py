@@ -1,0 +1,42 @@
+"""``timeseries.png`` of ``simulate``: temperatures, electrical powers, tensions and the tip's
+displacement against time, events marked."""
+import numpy as np
+
+from ..output import save_figure
+from .robot3d import _pyplot
+from .sweep_plots import line_style
+
+
+def save_timeseries_png(series, path, events=()):
+    """Four panels against time [s] (the solved output times); dotted red lines at ``events``
+    [s]. Saves a PNG at ``path`` and returns it."""
+    plt = _pyplot()
+    n = len(series.solutions)
+    t = series.t[:n]
+    fig, axes = plt.subplots(4, 1, figsize=(7, 9), sharex=True)
+    for k, key in enumerate(series.keys):
+        axes[0].plot(t, series.temperatures[:n, k], label=key, **line_style(k))
+        if not np.all(np.isnan(series.powers[:n, k])):
+            axes[1].plot(t, series.powers[:n, k] * 1e3, label=key, drawstyle="steps-post", **line_style(k))
+    for k, key in enumerate(series.solutions[0].actuators if n else []):
+        axes[2].plot(t, [s.actuators[key].tension * 1e3 for s in series.solutions], label=key, **line_style(k))
+    if n:
+        move = (series.tip_positions() - series.tip_positions()[0]) * 1e3
+        for axis, name in enumerate("xyz"):
+            axes[3].plot(t, move[:, axis], label=f"tip {name}", **line_style(axis))
+        axes[3].plot(t, np.linalg.norm(move, axis=1), color="black", label="|tip displacement|", **line_style(3))
+    labels = ["temperature [degC]", "electrical power [mW]", "tension [mN]", "tip displacement [mm]"]
+    for ax, label in zip(axes, labels):
+        ax.set_ylabel(label)
+        ax.grid(True, alpha=0.3)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7)
+        for at in events:
+            ax.axvline(at, color="tab:red", linestyle=":", linewidth=1)
+    axes[-1].set_xlabel("time [s]")
+    state = "" if series.completed else f"  (stopped: {series.message[:60]})"
+    axes[0].set_title(f"simulate{state}", fontsize=10)
+    fig.tight_layout()
+    save_figure(fig, path, dpi=110)
+    plt.close(fig)
+    return path

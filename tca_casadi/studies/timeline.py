@@ -1,0 +1,193 @@
+"""``tca-casadi simulate``: a scenario's ``timeline`` run in time (issue 15).
+
+The scenario at t = 0 is the state before the first event. Each event sets values by dotted
+path (drive values, temperatures, tensions, loads, the base pose, an object's ``held``), at once
+or linearly over its ramp; the values between events follow from the scenario after each event.
+TCAs with a ``power``, ``voltage`` or ``current`` drive get their temperatures from the thermal
+model (:mod:`tca_casadi.solvers.thermal`), starting from the steady state of their drive at
+t = 0; every other parameter follows the timeline. At every output time the quasi-static
+equilibrium is followed from the previous one (:func:`~tca_casadi.studies.heating.follow_parameters`).
+"""
+import numpy as np
+
+from ..errors import ScenarioError
+from ..model.thermal import thermal_law
+from ..scenario.loader import validate
+from ..scenario.overrides import apply_overrides
+from ..solvers.thermal import Drive, Schedule, integrate
+from .heating import TimeSeries, follow_parameters
+
+#: drive kinds the thermal model heats (``temperature`` sets the temperature directly)
+HEATED = ("power", "voltage", "current")
+
+
+class _TemperatureDrive:
+    """The default drive: the scenario's temperature, set directly."""
+    kind = "temperature"
+
+    def __init__(self, value):
+        self.value = value
+
+
+class TimeSimulation:
+    """A :class:`~tca_casadi.simulation.Simulation`'s timeline, ready to run.
+
+    Parameters
+    ----------
+    sim : Simulation
+        Its scenario holds ``duration``, ``timeline`` and the TCAs' ``drive`` s.
+    duration : float, optional
+        [s]; default the scenario's ``duration``, else the last event plus its ramp.
+    dt : float
+        Output step [s]; event times and ramp ends are output times too.
+    """
+
+    def __init__(self, sim, duration=None, dt=0.1):
+        self.sim = sim
+        scenario = sim.scenario
+        events = scenario.timeline
+        ends = [e.at + (e.ramp or 0.0) for e in events]
+        self.duration = float(duration or scenario.duration or (max(ends) if ends else 0.0))
+        if not self.duration > 0:
+            raise ScenarioError("simulate needs a duration (the scenario's duration, --duration, or a timeline)")
+        if not dt > 0:
+            raise ScenarioError(f"--dt must be positive (got {dt:g})")
+        if ends and max(e.at for e in events) > self.duration:
+            raise ScenarioError(f"the timeline's last event ({max(e.at for e in events):g} s) is after the "
+                                f"duration ({self.duration:g} s)")
+        self.dt = float(dt)
+        self.states = self._states_after_events()
+        self.heated = [a for a in sim.robot.tcas if self._drive(scenario, a).kind in HEATED]
+        self.laws = [thermal_law(scenario.tca_types[a.tca_type], a.law.fiber_length) for a in self.heated]
+        for actuator, law in zip(self.heated, self.laws):
+            kind = self._drive(scenario, actuator).kind
+            if kind in ("voltage", "current") and not law.resistance > 0:
+                raise ScenarioError(f"{actuator.key}: a {kind} drive needs tca_types.{actuator.tca_type}.resistance")
+
+    # ------------------------------------------------------------------ the timeline
+    @staticmethod
+    def _drive(scenario, actuator):
+        config = next(a for a in scenario.modules[actuator.module].actuators if a.name == actuator.name)
+        return config.drive or _TemperatureDrive(config.temperature)
+
+    def _states_after_events(self):
+        """``[(scenario, params)]``: at t = 0 and after each event (cumulative)."""
+        sim = self.sim
+        raw, sources = sim.scenario._raw, sim.scenario._sources
+        if raw is None:
+            raw, sources = sim.scenario.model_dump(mode="json"), None
+        structure = sim.robot.structure_key(sim.scenario)
+        states = [(sim.scenario, sim.params.copy())]
+        for k, event in enumerate(sim.scenario.timeline):
+            try:
+                raw = apply_overrides(raw, event.set, sources)
+                scenario = validate(raw, sources) if sources is not None else type(sim.scenario).model_validate(raw)
+            except ScenarioError as exc:
+                raise ScenarioError(f"timeline[{k}] (at {event.at:g} s): {str(exc).replace('--set ', '', 1)}") from None
+            if sim.robot.structure_key(scenario) != structure:
+                raise ScenarioError(f"timeline[{k}] (at {event.at:g} s): {', '.join(event.set)} changes the robot's "
+                                    "structure; a timeline may only set parameters and drive values")
+            states.append((scenario, self._with_set_temperatures(scenario, sim.robot.parameter_vector(scenario))))
+        states[0] = (sim.scenario, self._with_set_temperatures(sim.scenario, states[0][1]))
+        return states
+
+    def _with_set_temperatures(self, scenario, params):
+        """``params`` with each ``kind: temperature`` drive's value as its TCA's temperature."""
+        params = params.copy()
+        for actuator in self.sim.robot.tcas:
+            config = next(a for a in scenario.modules[actuator.module].actuators if a.name == actuator.name)
+            if config.drive is not None and config.drive.kind == "temperature":
+                params[self.sim.robot.layout[actuator.parameter]] = config.drive.value
+        return params
+
+    def output_times(self):
+        """``0, dt, 2 dt, ...`` up to the duration, with every event time and ramp end."""
+        grid = np.arange(0.0, self.duration + 0.5 * self.dt, self.dt)
+        marks = [t for e in self.sim.scenario.timeline for t in (e.at, e.at + (e.ramp or 0.0))]
+        times = np.union1d(np.round(grid, 12), [t for t in marks if t <= self.duration])
+        return times[times <= self.duration + 1e-12]
+
+    def _knots(self):
+        """Knot times and the state index on each side: values are linear between knots."""
+        knots = [(0.0, 0)]
+        for k, event in enumerate(self.sim.scenario.timeline, start=1):
+            knots += [(event.at, k - 1), (event.at + (event.ramp or 0.0), k)]
+        return knots
+
+    def parameters_at(self, t):
+        """The parameter vector the timeline gives at ``t`` [s] (heated TCAs' temperatures aside)."""
+        times = [k[0] for k in self._knots()]
+        vectors = [self.states[k[1]][1] for k in self._knots()]
+        return np.array([Schedule(tuple(times), tuple(v[i] for v in vectors))(t) for i in range(vectors[0].size)])
+
+    def drives(self):
+        """One :class:`Drive` per heated TCA: its value's schedule from the timeline."""
+        out = []
+        for actuator in self.heated:
+            knots = self._knots()
+            values = [float(self._drive(self.states[k][0], actuator).value) for _, k in knots]
+            out.append(Drive(self._drive(self.sim.scenario, actuator).kind,
+                             Schedule(tuple(t for t, _ in knots), tuple(values))))
+        return out
+
+    # ------------------------------------------------------------------ running
+    def run(self, progress=None):
+        """Temperatures in time, then the equilibrium at every output time. Returns a
+        :class:`TimeSeries` (``completed`` False and a ``message`` if it stopped)."""
+        times = self.output_times()
+        ambient = self.sim.scenario.ambient_temperature
+        drives = self.drives()
+        initial = [law.steady_temperature(d.kind, d.schedule(0.0, left=True), ambient)   # before any event
+                   for law, d in zip(self.laws, drives)]
+        history = integrate(self.laws, drives, ambient, initial, times) if self.heated else None
+        layout, tcas = self.sim.robot.layout, self.sim.robot.tcas
+        powers = np.full((times.size, len(tcas)), np.nan)
+        path = []
+        for k, t in enumerate(times):
+            params = self.parameters_at(t)
+            for j, actuator in enumerate(self.heated):
+                params[layout[actuator.parameter]] = history.temperature[k, j]
+                powers[k, tcas.index(actuator)] = history.power[k, j]
+            path.append(params)
+        temperatures = np.array([[p[layout[a.parameter]][0] for a in tcas] for p in path]).reshape(times.size, len(tcas))
+        series = TimeSeries(times, [a.key for a in tcas], temperatures, powers)
+        series.history = history
+        return follow_parameters(self.sim, series, path, progress)
+
+
+    # ------------------------------------------------------------------ reporting
+    def report(self, series):
+        """``simulation.json``: status, the events, per TCA its drive, peak temperature and
+        the electrical energy used [J] (heated TCAs), the heat balance's worst residual; up to
+        the last solved output time (the first, if none was)."""
+        history = getattr(series, "history", None)
+        reached = max(len(series.solutions), 1)
+        tcas = {}
+        for j, actuator in enumerate(self.sim.robot.tcas):
+            entry = {"drive": self._drive(self.sim.scenario, actuator).kind,
+                     "peak_temperature": float(np.max(series.temperatures[:reached, j]))}
+            if actuator in self.heated:
+                i = self.heated.index(actuator)
+                balance = history.heat_balance_residual()[:reached, i]
+                entry.update(energy=float(history.energy_in[reached - 1, i]), time_constant=self.laws[i].time_constant,
+                             heat_balance_residual=float(np.max(np.abs(balance))))
+            tcas[actuator.key] = entry
+        return {"completed": series.completed, "message": series.message, "duration": self.duration,
+                "dt": self.dt, "outputs": int(len(series.t)), "solved": len(series.solutions),
+                "ambient_temperature": self.sim.scenario.ambient_temperature,
+                "events": [{"at": e.at, "set": {k: str(v) for k, v in e.set.items()}, "ramp": e.ramp}
+                           for e in self.sim.scenario.timeline],
+                "tcas": tcas}
+
+    def summary(self, series):
+        state = "completed" if series.completed else "STOPPED"
+        lines = [f"{self.sim.scenario.name}: simulate {state} ({series.message}); {self.duration:g} s, "
+                 f"{len(series.t)} output times, {len(self.sim.scenario.timeline)} event(s)"]
+        report = self.report(series)
+        for key, entry in report["tcas"].items():
+            extra = (f", energy {entry['energy']:.4g} J, tau {entry['time_constant']:.3g} s" if "energy" in entry else "")
+            lines.append(f"  {key:<24} {entry['drive']:<11} peak {entry['peak_temperature']:.2f} degC{extra}")
+        if series.solutions:
+            tip = series.solutions[-1].tip_position * 1e3
+            lines.append("  tip at the end [mm]: " + " ".join(f"{v:+.4f}" for v in tip))
+        return "\n".join(lines)

@@ -1,0 +1,77 @@
+"""``tca-casadi simulate``: a heating and cooling cycle against the closed form, a ramped load
+event against independent solves, the files, and bad input."""
+import json
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from conftest import SCENARIOS
+from tca_casadi import Simulation
+from tca_casadi.cli import main
+from tca_casadi.studies.timeline import TimeSimulation
+
+BENDING = str(SCENARIOS / "bending_module.yaml")
+CYCLE = ["bending.tca2.drive={kind: power, value: 0}", "bending.tca3.drive={kind: power, value: 0}", "duration=40",
+         "timeline=[{at: 1 s, set: {bending.tca2.drive.value: 0.5 W, bending.tca3.drive.value: 0.5 W}},"
+         " {at: 20 s, set: {bending.tca2.drive.value: 0, bending.tca3.drive.value: 0}},"
+         " {at: 25 s, set: {tip_force.force: [0.002, 0, 0]}, ramp: 4 s}]"]
+
+
+def _sets(items):
+    return [arg for item in items for arg in ("--set", item)]
+
+
+def test_heating_cycle_files_and_closed_form(tmp_path, capsys):
+    assert main(["simulate", BENDING, *_sets(CYCLE), "--dt", "2", "-o", str(tmp_path), "--quiet"]) == 0
+    assert "simulate completed" in capsys.readouterr().out
+    report = json.loads((tmp_path / "simulation.json").read_text())
+    assert report["completed"] and report["outputs"] == report["solved"]
+    tca2 = report["tcas"]["bending.tca2"]
+    assert_allclose(tca2["energy"], 0.5 * 19.0, rtol=1e-9, atol=0)        # 0.5 W from 1 s to 20 s
+    assert tca2["heat_balance_residual"] <= 1e-9 * tca2["energy"]
+    data = np.genfromtxt(tmp_path / "timeseries.csv", delimiter=",", names=True)
+    t, T = data["t_s"], data["bendingtca2temperature_degC"]
+    sim = Simulation.from_file(BENDING, CYCLE)
+    law = TimeSimulation(sim).laws[0]
+    rise = 0.5 / law.conductance
+    heating = (t > 1) & (t <= 20)
+    expected = 25.0 + rise * (1 - np.exp(-(t[heating] - 1.0) / law.time_constant))
+    assert_allclose(T[heating], expected, rtol=0, atol=1e-6 * rise)
+    T20 = 25.0 + rise * (1 - np.exp(-19.0 / law.time_constant))
+    cooling = t >= 20
+    assert_allclose(T[cooling], 25.0 + (T20 - 25.0) * np.exp(-(t[cooling] - 20.0) / law.time_constant),
+                    rtol=0, atol=1e-6 * rise)
+    assert {1.0, 20.0, 25.0, 29.0} <= set(t.tolist())                      # event times and the ramp's end
+    for name in ("timeseries.csv", "simulation.json", "timeseries.png"):
+        assert (tmp_path / name).stat().st_size > 0
+
+
+def test_a_ramped_event_is_linear_and_each_output_is_an_independent_solve():
+    sim = Simulation.from_file(BENDING, CYCLE)
+    timed = TimeSimulation(sim, duration=30.0, dt=1.0)
+    series = timed.run()
+    assert series.completed, series.message
+    for t, fraction in ((25.0, 0.0), (26.0, 0.25), (27.0, 0.5), (30.0, 1.0)):
+        k = int(np.flatnonzero(series.t == t)[0])
+        assert_allclose(timed.parameters_at(t)[sim.robot.layout["tip_force.force"]], [0.002 * fraction, 0, 0],
+                        rtol=0, atol=1e-15)
+        alone = Simulation.from_file(BENDING, [f"tip_force.force=[{0.002 * fraction}, 0, 0]"])
+        for j, key in enumerate(series.keys):
+            alone.set_parameter(f"{key}.temperature", series.temperatures[k, j])
+        assert_allclose(series.solutions[k].tip_position, alone.solve(warn=False).tip_position, rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("settings, words", [
+    (["duration=10", "timeline=[{at: 12 s}]"], "after the duration"),
+    (["duration=10", "timeline=[{at: 2 s}, {at: 1 s}]"], "must be in time order"),
+    (["duration=10", "timeline=[{at: 2 s, ramp: 3 s}, {at: 4 s}]"], "ends after the next event"),
+    (["duration=10", "timeline=[{at: 2 s, set: {bending.tca2.temprature: 50}}]"], "timeline[0] (at 2 s)"),
+    (["duration=10", "timeline=[{at: 2 s, set: {bending.length: 40 mm}}]"], "changes the robot's structure"),
+    (["bending.tca2.drive={kind: voltage, value: 3 V}", "duration=10"], "needs tca_types.nylon.resistance"),
+    (["bending.tca2.drive={kind: power, value: -1 W}"], "must not be negative"),
+])
+def test_bad_timelines_are_one_line(tmp_path, capsys, settings, words):
+    assert main(["simulate", BENDING, *_sets(settings), "-o", str(tmp_path), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0], err
