@@ -186,6 +186,24 @@ def startup(repeats=5):
     return out
 
 
+#: the heating/cooling cycle of ``simulate``'s benchmark: 0.5 W on TCAs 2 and 3 from 1 s to 30 s
+CYCLE = ["bending.tca2.drive={kind: power, value: 0}", "bending.tca3.drive={kind: power, value: 0}", "duration=60",
+         "timeline=[{at: 1 s, set: {bending.tca2.drive.value: 0.5 W, bending.tca3.drive.value: 0.5 W}},"
+         " {at: 30 s, set: {bending.tca2.drive.value: 0, bending.tca3.drive.value: 0}}]"]
+
+
+def simulate_cycle(dt, repeats):
+    """Median wall time [s] of the bending module's 60 s heating/cooling cycle at output step
+    ``dt`` (the NLP built and the t = 0 state solved before timing; the thermal integration
+    and every output time's equilibrium timed), and the real-time factor."""
+    from tca_casadi.studies.timeline import TimeSimulation
+    sim = Simulation.from_file(SCENARIOS / "bending_module.yaml", CYCLE)
+    sim.solve(warn=False)
+    seconds, series = median_time(lambda: TimeSimulation(sim, dt=dt).run(), repeats)
+    return {"simulate_dt_s": dt, "simulate_outputs": int(len(series.t)), "simulate_s": seconds,
+            "simulate_real_time_factor": 60.0 / seconds, "simulate_completed": bool(series.completed)}
+
+
 def check_times(names):
     """``tca-casadi check`` on shipped scenarios: collocation and shooting seconds, agreement."""
     from tca_casadi.studies import check
@@ -260,6 +278,7 @@ def main(argv=None):
     machine = {"date": date.today().isoformat(), "cpus": _cpus(), "python": platform.python_version(),
                "platform": platform.platform()}
     started = startup(1 if args.quick else 5)
+    cycle = simulate_cycle(1.0 if args.quick else 0.1, 1 if args.quick else 3)
     checks = check_times(["bending_module"] if args.quick else
                          ["bending_module", "twisting_module", "tendon_robot", "tendon_robot_two_segments",
                           "arm", "arm_pick_and_place", "analytic/pure_moment", "analytic/tip_load",
@@ -269,9 +288,12 @@ def main(argv=None):
     for name, c in checks.items():
         print(f"check {name}: collocation {c['collocation_s']:.3f} s, shooting {c['shooting_s']:.3f} s, "
               f"{'agree' if c['agree'] else 'DISAGREE'} (tip {c['tip_difference_m']:.1e} m)")
+    print(f"simulate: 60 s heating/cooling cycle of the bending module at dt {cycle['simulate_dt_s']:g} s "
+          f"({cycle['simulate_outputs']} outputs): {cycle['simulate_s']:.2f} s, "
+          f"{cycle['simulate_real_time_factor']:.0f}x real time")
     print(f"measured {machine['date']} on {machine['cpus']} CPUs, Python {machine['python']}")
     args.output.parent.mkdir(parents=True, exist_ok=True)
-    args.output.write_text(json.dumps({"quick": args.quick, "machine": machine, "startup": started,
+    args.output.write_text(json.dumps({"quick": args.quick, "machine": machine, "startup": started, "simulate": cycle,
                                        "check": checks, "rows": rows}, indent=2))
     print(f"wrote {args.output}")
     return rows

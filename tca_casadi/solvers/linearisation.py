@@ -64,6 +64,8 @@ def _parity(permutation):
     as connected components of the permutation's graph."""
     permutation = np.asarray(permutation)
     n = permutation.size
+    if np.array_equal(permutation, np.arange(n)):      # the natural column order: even
+        return 1
     graph = sp.csr_matrix((np.ones(n), (np.arange(n), permutation)), shape=(n, n))
     cycles = connected_components(graph, directed=True, connection="weak")[0]
     return -1 if (n - cycles) % 2 else 1

@@ -86,7 +86,7 @@ def follow_parameters(sim, series, path, progress=None):
     cannot be followed (``completed`` is then False, ``message`` says why; the solutions up
     to there are kept). ``sim``'s parameters are left as they were."""
     base = sim.params.copy()
-    solution = previous = None
+    solution = previous = linearisation = None
     try:
         for k, params in enumerate(path):
             problems = sim.robot.problems(params)
@@ -101,12 +101,13 @@ def follow_parameters(sim, series, path, progress=None):
                     break
             else:
                 follower = BranchFollower(sim.solver("collocation"), previous, params - previous)
-                point, _, _, failure = follower.advance(follower.point(0.0, solution), 1.0, 1.0, 1.0, 1e-4)
+                start = follower.point(0.0, solution, linearisation=linearisation)   # the last one's, reused
+                point, _, _, failure = follower.advance(start, 1.0, 1.0, 1.0, 1e-4)
                 if failure is not None:
                     series.message = (f"stopped at t = {series.t[k]:g} s: the equilibrium could not be "
                                       f"followed from t = {series.t[k - 1]:g} s ({failure.trial.message})")
                     break
-                solution = point.solution
+                solution, linearisation = point.solution, point.linearisation
             previous = params
             series.solutions.append(solution)
             if progress is not None:

@@ -10,6 +10,9 @@ def test_bench_quick_smoke(tmp_path, capsys):
     from bench import main
     rows = main(["--quick", "-o", str(tmp_path / "bench.json")])
     assert (tmp_path / "bench.json").exists()
+    import json
+    cycle = json.loads((tmp_path / "bench.json").read_text())["simulate"]
+    assert cycle["simulate_completed"] and cycle["simulate_outputs"] == 61
     by_name = {row["problem"]: row for row in rows}
     bending = by_name["bending_module"]
     assert bending["cold_converged"] and bending["sweep_completed"]
