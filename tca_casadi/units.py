@@ -40,6 +40,7 @@ KINDS = {
     "voltage": ("V", "a voltage"),
     "current": ("A", "a current"),
     "time": ("s", "a time"),
+    "integral_gain": ("W/(K*s)", "an integral gain (W/(K s))"),
     "untwist_c2": ("", "an untwist coefficient in rad/(m degC^2) (a plain number)"),
     "untwist_c1": ("", "an untwist coefficient in rad/(m degC) (a plain number)"),
     "untwist_c0": ("", "an untwist coefficient in rad/m (a plain number)"),
@@ -52,7 +53,8 @@ UNIT_OF = {"temperature": "degC", "force": "N", "moment": "N m", "mass": "kg", "
            "untwist_c2": "rad/(m degC^2)", "untwist_c1": "rad/(m degC)", "untwist_c0": "rad/m",
            "dimensionless": "-", "heat_capacity": "J/K", "thermal_conductance": "W/K",
            "specific_heat": "J/(kg K)", "heat_transfer_coefficient": "W/(m^2 K)", "resistance": "ohm",
-           "per_kelvin": "1/K", "power": "W", "voltage": "V", "current": "A", "time": "s"}
+           "per_kelvin": "1/K", "power": "W", "voltage": "V", "current": "A", "time": "s",
+           "integral_gain": "W/(K s)"}
 
 _NUMBER_AND_UNIT = re.compile(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*)", re.DOTALL)
 

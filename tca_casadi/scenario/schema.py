@@ -246,21 +246,34 @@ Route = Annotated[Union[Straight, Helix, Curve], Field(discriminator="kind")]
 
 # ----------------------------------------------------------------------------- actuators
 #: a drive's kind -> the unit kind of its value
-DRIVE_UNITS = {"power": "power", "voltage": "voltage", "current": "current", "temperature": "temperature"}
+DRIVE_UNITS = {"power": "power", "voltage": "voltage", "current": "current", "temperature": "temperature",
+               "setpoint": "temperature"}
+
+
+class PiGains(Strict):
+    """A PI temperature controller's gains: ``proportional`` [W/K], ``integral`` [W/(K s)]."""
+    proportional: Annotated[float, _quantity("thermal_conductance"), Field(ge=0)]
+    integral: Annotated[float, _quantity("integral_gain"), Field(gt=0)]
 
 
 class TcaDrive(Strict):
     """How a TCA is heated in ``tca-casadi simulate``: ``kind`` ``power`` [W], ``voltage`` [V],
-    ``current`` [A] or ``temperature`` [degC] (the temperature is set directly, as in
-    ``solve``), and its ``value``."""
-    kind: Literal["power", "voltage", "current", "temperature"]
+    ``current`` [A], ``temperature`` [degC] (set directly, as in ``solve``) or ``setpoint``
+    [degC] (a PI controller with ``gains`` and a ``max_power`` [W]), and its ``value``."""
+    kind: Literal["power", "voltage", "current", "temperature", "setpoint"]
     value: Union[float, str] = 0.0
+    gains: Optional[PiGains] = None
+    max_power: Optional[Annotated[float, _quantity("power"), Field(gt=0)]] = None
 
     @model_validator(mode="after")
     def _value_in_its_unit(self):
         self.value = to_si(self.value, DRIVE_UNITS[self.kind])
-        if self.kind != "temperature" and self.value < 0:
+        if self.kind not in ("temperature", "setpoint") and self.value < 0:
             raise ValueError(f"a {self.kind} drive's value must not be negative (got {self.value:g})")
+        if self.kind == "setpoint" and (self.gains is None or self.max_power is None):
+            raise ValueError("a setpoint drive needs gains: {proportional, integral} and max_power")
+        if self.kind != "setpoint" and (self.gains is not None or self.max_power is not None):
+            raise ValueError("gains and max_power belong to a setpoint drive")
         return self
 
 

@@ -44,10 +44,37 @@ class Schedule:
 
 @dataclass(frozen=True)
 class Drive:
-    """How one TCA is heated: ``kind`` ``power`` [W], ``voltage`` [V] or ``current`` [A], and
-    its :class:`Schedule`."""
+    """How one TCA is heated: ``kind`` ``power`` [W], ``voltage`` [V], ``current`` [A] or
+    ``setpoint`` [degC], and its :class:`Schedule`. A ``setpoint`` drive is a PI temperature
+    controller with a power limit, as on a lab bench: ``P = clip(kp e + ki I, 0, max_power)``,
+    ``e = T_set - T``, ``dI/dt = e`` except while the output is saturated and ``e`` would push
+    it further (conditional integration: no wind-up)."""
     kind: str
     schedule: Schedule
+    proportional: float = 0.0           # kp [W/K]
+    integral: float = 0.0               # ki [W/(K s)]
+    max_power: float = float("inf")     # [W]
+
+    def controller_power(self, error, state):
+        """``(P, dI/dt)`` of the PI controller for ``error`` [K] and integral ``state`` [K s]."""
+        raw = self.proportional * error + self.integral * state
+        power = min(max(raw, 0.0), self.max_power)
+        winding = (raw >= self.max_power and error > 0) or (raw <= 0.0 and error < 0)
+        return power, 0.0 if winding else error
+
+    def initial_state(self, law, ambient):
+        """``(T, I)`` before any event: a setpoint drive at its steady state (the setpoint if
+        ``max_power`` can hold it, else the temperature ``max_power`` holds); others at the
+        closed-form steady state of their drive, ``I = 0``."""
+        value = self.schedule(0.0, left=True)
+        if self.kind != "setpoint":
+            return law.steady_temperature(self.kind, value, ambient), 0.0
+        needed = law.conductance * (value - ambient)
+        if needed <= 0:
+            return ambient, 0.0
+        power = min(needed, self.max_power)
+        temperature = ambient + power / law.conductance
+        return temperature, (power - self.proportional * (value - temperature)) / self.integral
 
 
 @dataclass
@@ -69,33 +96,46 @@ class ThermalHistory:
 
 def integrate(laws, drives, ambient, initial, outputs, rtol=1e-11, atol=1e-11):
     """Integrate ``C dT/dt = P(t, T) - G (T - T_amb)`` for each TCA (``laws``:
-    :class:`ThermalLaw` s, ``drives``: :class:`Drive` s, ``initial`` temperatures [degC]) and
-    report at the increasing ``outputs`` [s] (the first is the start). Returns a
-    :class:`ThermalHistory`."""
+    :class:`ThermalLaw` s, ``drives``: :class:`Drive` s, ``initial`` temperatures [degC], or
+    ``(T, I)`` pairs with the controllers' integral states, e.g. from
+    :meth:`Drive.initial_state`) and report at the increasing ``outputs`` [s] (the first is the
+    start). Returns a :class:`ThermalHistory`."""
     outputs = np.asarray(outputs, float)
     count = len(laws)
     capacity = np.array([law.heat_capacity for law in laws])
 
     conductance = np.array([law.conductance for law in laws])
 
-    def powers(t, temperature, left=False):
-        return np.array([float(law.power(d.kind, d.schedule(t, left), T))
-                         for law, d, T in zip(laws, drives, temperature)])
+    def powers_and_rates(t, temperature, integral, left=False):
+        """Electrical powers (count,) and the controllers' ``dI/dt`` (count,)."""
+        power, rate = np.zeros(count), np.zeros(count)
+        for j, (law, drive) in enumerate(zip(laws, drives)):
+            value = drive.schedule(t, left)
+            if drive.kind == "setpoint":
+                power[j], rate[j] = drive.controller_power(value - temperature[j], integral[j])
+            else:
+                power[j] = float(law.power(drive.kind, value, temperature[j]))
+        return power, rate
+
+    def powers(t, temperature, integral, left=False):
+        return powers_and_rates(t, temperature, integral, left)[0]
 
     def rhs_from(start):
         """The right-hand side on a piece starting at ``start``: drives take their values from
         inside the piece (the limit from the left at its end), never the next piece's."""
         def rhs(t, y):
-            temperature = y[:count]
-            power = powers(t, temperature, left=t > start)
+            temperature, integral = y[:count], y[3 * count:]
+            power, rate = powers_and_rates(t, temperature, integral, left=t > start)
             lost = conductance * (temperature - ambient)
-            return np.concatenate([(power - lost) / capacity, power, lost])
+            return np.concatenate([(power - lost) / capacity, power, lost, rate])
         return rhs
 
     cuts = sorted({b for d in drives for b in d.schedule.breakpoints if outputs[0] < b < outputs[-1]})
     edges = [outputs[0], *cuts, outputs[-1]]
-    y = np.concatenate([np.asarray(initial, float), np.zeros(2 * count)])
-    states = np.empty((outputs.size, 3 * count))
+    initial = np.asarray(initial, float).reshape(count, -1)          # (count,) T or (count, 2) T and I
+    integral0 = initial[:, 1] if initial.shape[1] > 1 else np.zeros(count)
+    y = np.concatenate([initial[:, 0], np.zeros(2 * count), integral0])
+    states = np.empty((outputs.size, 4 * count))
     states[0] = y
     for start, end in zip(edges[:-1], edges[1:]):
         inside = (outputs > start) & (outputs <= end)
@@ -106,6 +146,7 @@ def integrate(laws, drives, ambient, initial, outputs, rtol=1e-11, atol=1e-11):
         states[inside] = solution.y.T[np.isin(times, outputs[inside])]
         y = solution.y[:, -1]
     temperature = states[:, :count]
-    power = np.array([powers(t, T) for t, T in zip(outputs, temperature)])
-    return ThermalHistory(outputs, temperature, power, states[:, count:2 * count], states[:, 2 * count:], capacity)
+    power = np.array([powers(t, y[:count], y[3 * count:]) for t, y in zip(outputs, states)]).reshape(outputs.size, count)
+    return ThermalHistory(outputs, temperature, power, states[:, count:2 * count], states[:, 2 * count:3 * count],
+                          capacity)
 

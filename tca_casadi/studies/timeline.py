@@ -18,7 +18,7 @@ from ..solvers.thermal import Drive, Schedule, integrate
 from .heating import TimeSeries, follow_parameters
 
 #: drive kinds the thermal model heats (``temperature`` sets the temperature directly)
-HEATED = ("power", "voltage", "current")
+HEATED = ("power", "voltage", "current", "setpoint")
 
 
 class _TemperatureDrive:
@@ -63,6 +63,12 @@ class TimeSimulation:
             kind = self._drive(scenario, actuator).kind
             if kind in ("voltage", "current") and not law.resistance > 0:
                 raise ScenarioError(f"{actuator.key}: a {kind} drive needs tca_types.{actuator.tca_type}.resistance")
+            if kind == "setpoint":
+                highest = max(self._drive(state, actuator).value for state, _ in self.states)
+                limit = actuator.law.max_temperature
+                if highest > limit:
+                    raise ScenarioError(f"{actuator.key}: setpoint {highest:g} degC is above tca_types."
+                                        f"{actuator.tca_type}.max_temperature ({limit:g} degC)")
 
     # ------------------------------------------------------------------ the timeline
     @staticmethod
@@ -126,8 +132,11 @@ class TimeSimulation:
         for actuator in self.heated:
             knots = self._knots()
             values = [float(self._drive(self.states[k][0], actuator).value) for _, k in knots]
-            out.append(Drive(self._drive(self.sim.scenario, actuator).kind,
-                             Schedule(tuple(t for t, _ in knots), tuple(values))))
+            config = self._drive(self.sim.scenario, actuator)
+            pi = {} if config.kind != "setpoint" else {"proportional": config.gains.proportional,
+                                                       "integral": config.gains.integral,
+                                                       "max_power": config.max_power}
+            out.append(Drive(config.kind, Schedule(tuple(t for t, _ in knots), tuple(values)), **pi))
         return out
 
     # ------------------------------------------------------------------ running
@@ -137,8 +146,7 @@ class TimeSimulation:
         times = self.output_times()
         ambient = self.sim.scenario.ambient_temperature
         drives = self.drives()
-        initial = [law.steady_temperature(d.kind, d.schedule(0.0, left=True), ambient)   # before any event
-                   for law, d in zip(self.laws, drives)]
+        initial = [d.initial_state(law, ambient) for law, d in zip(self.laws, drives)]   # before any event
         history = integrate(self.laws, drives, ambient, initial, times) if self.heated else None
         layout, tcas = self.sim.robot.layout, self.sim.robot.tcas
         powers = np.full((times.size, len(tcas)), np.nan)

@@ -70,8 +70,24 @@ def test_a_ramped_event_is_linear_and_each_output_is_an_independent_solve():
     (["duration=10", "timeline=[{at: 2 s, set: {bending.length: 40 mm}}]"], "changes the robot's structure"),
     (["bending.tca2.drive={kind: voltage, value: 3 V}", "duration=10"], "needs tca_types.nylon.resistance"),
     (["bending.tca2.drive={kind: power, value: -1 W}"], "must not be negative"),
+    (["bending.tca2.drive={kind: setpoint, value: 160, gains: {proportional: 0.05, integral: 0.005}, max_power: 1}",
+      "duration=10"], "setpoint 160 degC is above tca_types.nylon.max_temperature"),
+    (["bending.tca2.drive={kind: setpoint, value: 60}"], "needs gains"),
 ])
 def test_bad_timelines_are_one_line(tmp_path, capsys, settings, words):
     assert main(["simulate", BENDING, *_sets(settings), "-o", str(tmp_path), "--quiet"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and words in err[0], err
+
+
+def test_a_setpoint_drive_holds_its_temperature_within_its_power():
+    settings = ["bending.tca2.drive={kind: setpoint, value: 25, gains: {proportional: 0.05 W/K, "
+                "integral: 0.005 W/K/s}, max_power: 1 W}", "duration=200",
+                "timeline=[{at: 1 s, set: {bending.tca2.drive.value: 80}}]"]
+    sim = Simulation.from_file(BENDING, settings)
+    series = TimeSimulation(sim, dt=4.0).run()
+    assert series.completed, series.message
+    j = series.keys.index("bending.tca2")
+    assert np.nanmax(series.powers[:, j]) <= 1.0 and series.powers[1, j] == 1.0   # saturated while far
+    assert_allclose(series.temperatures[-1, j], 80.0, rtol=0, atol=1e-6)
+    assert series.temperatures[:, j].max() <= 80.0 + 1e-6

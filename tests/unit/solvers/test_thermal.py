@@ -45,3 +45,33 @@ def test_voltage_step_reaches_the_closed_form_steady_state_and_balances_heat(alp
     balance = history.heat_balance_residual()
     assert balance.shape == (outputs.size, 2)
     assert np.all(np.max(np.abs(balance), axis=0) <= 1e-6 * history.energy_in[-1])
+
+
+def test_pi_setpoint_settles_without_error_and_respects_the_power_limit():
+    """From ambient to 80 degC with a 1 W limit (saturated at first), then down to 60 degC: no
+    steady-state error, the power never above the limit nor below zero, no wind-up (the power
+    leaves the limit as soon as the temperature passes the setpoint)."""
+    drive = Drive("setpoint", Schedule((0.0, 150.0, 150.0), (80.0, 80.0, 60.0)),
+                  proportional=0.05, integral=0.005, max_power=1.0)
+    outputs = np.linspace(0.0, 300.0, 3001)
+    history = integrate([LAW], [drive], AMBIENT, [(AMBIENT, 0.0)], outputs)
+    T, P = history.temperature[:, 0], history.power[:, 0]
+    assert np.all(P <= 1.0) and np.all(P >= 0.0)
+    assert P[0] == 1.0                                               # saturated at the start
+    at_150, at_300 = np.searchsorted(outputs, 150.0), -1
+    assert_allclose(T[at_150 - 1], 80.0, rtol=0, atol=1e-6)          # settled before the setpoint change
+    assert_allclose(T[at_300], 60.0, rtol=0, atol=1e-6)
+    assert_allclose(P[at_300], LAW.conductance * (60.0 - AMBIENT), rtol=0, atol=1e-8)   # P = G (T_set - T_amb)
+    above = np.flatnonzero(T > 80.0 + 1e-9)
+    assert above.size == 0 or P[above[0]] < 1.0                      # off the limit once past the setpoint
+    assert T.max() < 80.0 + 1.0                                      # no wind-up overshoot
+
+
+def test_setpoint_initial_state_is_its_steady_state():
+    drive = Drive("setpoint", Schedule.constant(60.0), proportional=0.05, integral=0.005, max_power=1.0)
+    T0, I0 = drive.initial_state(LAW, AMBIENT)
+    history = integrate([LAW], [drive], AMBIENT, [(T0, I0)], np.linspace(0.0, 50.0, 11))
+    assert_allclose(history.temperature[:, 0], 60.0, rtol=0, atol=1e-9)
+    weak = Drive("setpoint", Schedule.constant(140.0), proportional=0.05, integral=0.005, max_power=0.5)
+    T0, _ = weak.initial_state(LAW, AMBIENT)                         # 0.5 W holds only T_amb + P/G
+    assert_allclose(T0, AMBIENT + 0.5 / LAW.conductance, rtol=1e-15, atol=0)
