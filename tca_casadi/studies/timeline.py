@@ -21,6 +21,36 @@ from .heating import TimeSeries, follow_parameters
 HEATED = ("power", "voltage", "current", "setpoint")
 
 
+def step_response(t, y, start, end):
+    """10-90 % rise time and 2 % settling time [s] of the signal ``y`` (at times ``t``) after
+    an event at ``start``, the window ending at ``end`` (the next event or the end of the run):
+    measured from ``start`` against the change from ``y(start)`` to ``y(end)`` (crossings
+    interpolated linearly between output times). ``{"change", "rise_time", "settling_time"}``;
+    the times are None when the signal does not change."""
+    inside = (t >= start - 1e-12) & (t <= end + 1e-12)
+    t, y = np.asarray(t, float)[inside], np.asarray(y, float)[inside]
+    change = float(y[-1] - y[0]) if y.size else 0.0
+    if y.size < 2 or abs(change) <= 1e-12 * max(1.0, float(np.max(np.abs(y)))):
+        return {"change": change, "rise_time": None, "settling_time": None}
+    progress = (y - y[0]) / change
+
+    def crossing(level):
+        k = int(np.argmax(progress >= level))
+        if k == 0:
+            return float(t[0])
+        return float(t[k - 1] + (level - progress[k - 1]) / (progress[k] - progress[k - 1]) * (t[k] - t[k - 1]))
+
+    outside = np.flatnonzero(np.abs(progress - 1.0) > 0.02)
+    if outside.size == 0:
+        settled = float(t[0])
+    else:
+        k = outside[-1]              # the last output outside the band; it enters between k and k + 1
+        excess = abs(progress[k] - 1.0) - 0.02
+        after = abs(progress[k + 1] - 1.0) - 0.02
+        settled = float(t[k] + excess / (excess - after) * (t[k + 1] - t[k]))
+    return {"change": change, "rise_time": crossing(0.9) - crossing(0.1), "settling_time": settled - float(t[0])}
+
+
 class _TemperatureDrive:
     """The default drive: the scenario's temperature, set directly."""
     kind = "temperature"
@@ -180,12 +210,34 @@ class TimeSimulation:
                 entry.update(energy=float(history.energy_in[reached - 1, i]), time_constant=self.laws[i].time_constant,
                              heat_balance_residual=float(np.max(np.abs(balance))))
             tcas[actuator.key] = entry
+        responses = self._responses(series, reached)
+        for key, entry in tcas.items():
+            entry["responses"] = responses[key]
         return {"completed": series.completed, "message": series.message, "duration": self.duration,
                 "dt": self.dt, "outputs": int(len(series.t)), "solved": len(series.solutions),
                 "ambient_temperature": self.sim.scenario.ambient_temperature,
                 "events": [{"at": e.at, "set": {k: str(v) for k, v in e.set.items()}, "ramp": e.ramp}
                            for e in self.sim.scenario.timeline],
-                "tcas": tcas}
+                "tcas": tcas, "tip_responses": responses["tip"]}
+
+    def _responses(self, series, reached):
+        """Per event: the step response of each TCA's temperature and of the tip's distance
+        from where it was at the event (:func:`step_response`), over the solved outputs."""
+        t = series.t[:reached]
+        tips = series.tip_positions() if series.solutions else np.zeros((0, 3))
+        events = self.sim.scenario.timeline
+        out = {key: [] for key in series.keys} | {"tip": []}
+        for k, event in enumerate(events):
+            end = events[k + 1].at if k + 1 < len(events) else self.duration
+            if event.at > t[-1] if t.size else True:
+                break
+            for j, key in enumerate(series.keys):
+                out[key].append({"at": event.at, **step_response(t, series.temperatures[:reached, j], event.at, end)})
+            if tips.shape[0]:
+                at = int(np.argmin(np.abs(t - event.at)))
+                distance = np.linalg.norm(tips - tips[at], axis=1)
+                out["tip"].append({"at": event.at, **step_response(t, distance, event.at, end)})
+        return out
 
     def summary(self, series):
         state = "completed" if series.completed else "STOPPED"

@@ -30,6 +30,11 @@ def test_heating_cycle_files_and_closed_form(tmp_path, capsys):
     tca2 = report["tcas"]["bending.tca2"]
     assert_allclose(tca2["energy"], 0.5 * 19.0, rtol=1e-9, atol=0)        # 0.5 W from 1 s to 20 s
     assert tca2["heat_balance_residual"] <= 1e-9 * tca2["energy"]
+    assert [r["at"] for r in tca2["responses"]] == [1.0, 20.0, 25.0]          # one per event
+    heating, cooling = tca2["responses"][:2]
+    assert heating["change"] > 0 and cooling["change"] < 0 and heating["rise_time"] > 0
+    assert report["tcas"]["bending.tca1"]["responses"][0]["rise_time"] is None   # never heated
+    assert len(report["tip_responses"]) == 3 and report["tip_responses"][2]["rise_time"] > 0
     data = np.genfromtxt(tmp_path / "timeseries.csv", delimiter=",", names=True)
     t, T = data["t_s"], data["bendingtca2temperature_degC"]
     sim = Simulation.from_file(BENDING, CYCLE)

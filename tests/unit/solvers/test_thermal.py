@@ -75,3 +75,16 @@ def test_setpoint_initial_state_is_its_steady_state():
     weak = Drive("setpoint", Schedule.constant(140.0), proportional=0.05, integral=0.005, max_power=0.5)
     T0, _ = weak.initial_state(LAW, AMBIENT)                         # 0.5 W holds only T_amb + P/G
     assert_allclose(T0, AMBIENT + 0.5 / LAW.conductance, rtol=1e-15, atol=0)
+
+
+def test_step_response_of_a_first_order_lag():
+    """10-90 % rise tau ln 9 and 2 % settling tau ln 50 of 1 - exp(-t/tau) after an event at 1 s."""
+    from tca_casadi.studies.timeline import step_response
+    tau = LAW.time_constant
+    t = np.linspace(0.0, 30 * tau, 30001)
+    y = 25.0 + 50.0 * (1.0 - np.exp(-np.clip(t - 1.0, 0.0, None) / tau))
+    response = step_response(t, y, 1.0, t[-1])
+    assert_allclose(response["rise_time"], tau * np.log(9.0), rtol=1e-6, atol=0)
+    assert_allclose(response["settling_time"], tau * np.log(50.0), rtol=1e-6, atol=0)
+    flat = step_response(t, np.full_like(t, 3.0), 1.0, t[-1])
+    assert flat["rise_time"] is None and flat["settling_time"] is None
