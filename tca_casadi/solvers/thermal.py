@@ -26,16 +26,18 @@ class Schedule:
         return cls((0.0,), (float(value),))
 
     def __call__(self, t, left=False):
-        """The value at ``t`` [s]; at a step, the value after it (``left``: before it)."""
+        """The value at ``t`` [s]; at a step, the value after it (``left``: before it). Values
+        may be vectors (each ``values[k]`` an array): the result is then an array."""
         times, values = np.asarray(self.times, float), np.asarray(self.values, float)
         after = np.searchsorted(times, t, side="left" if left else "right")
         if after == 0:
-            return float(values[0])
-        if after == len(times):
-            return float(values[-1])
-        t0, t1 = times[after - 1], times[after]
-        v0, v1 = values[after - 1], values[after]
-        return float(v0 + (v1 - v0) * (t - t0) / (t1 - t0))
+            value = values[0]
+        elif after == len(times):
+            value = values[-1]
+        else:
+            t0, t1 = times[after - 1], times[after]
+            value = values[after - 1] + (values[after] - values[after - 1]) * (t - t0) / (t1 - t0)
+        return float(value) if np.ndim(value) == 0 else np.array(value)
 
     @property
     def breakpoints(self):

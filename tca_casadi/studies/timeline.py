@@ -8,6 +8,8 @@ model (:mod:`tca_casadi.solvers.thermal`), starting from the steady state of the
 t = 0; every other parameter follows the timeline. At every output time the quasi-static
 equilibrium is followed from the previous one (:func:`~tca_casadi.studies.heating.follow_parameters`).
 """
+import copy
+
 import numpy as np
 
 from ..errors import ScenarioError
@@ -86,6 +88,7 @@ class TimeSimulation:
             raise ScenarioError(f"the timeline's last event ({max(e.at for e in events):g} s) is after the "
                                 f"duration ({self.duration:g} s)")
         self.dt = float(dt)
+        self._parameter_schedule = None
         self.states = self._states_after_events()
         self.heated = [a for a in sim.robot.tcas if self._drive(scenario, a).kind in HEATED]
         self.laws = [thermal_law(scenario.tca_types[a.tca_type], a.law.fiber_length) for a in self.heated]
@@ -109,7 +112,7 @@ class TimeSimulation:
     def _states_after_events(self):
         """``[(scenario, params)]``: at t = 0 and after each event (cumulative)."""
         sim = self.sim
-        raw, sources = sim.scenario._raw, sim.scenario._sources
+        raw, sources = sim.scenario._raw, copy.deepcopy(sim.scenario._sources)   # the events' origins stay here
         if raw is None:
             raw, sources = sim.scenario.model_dump(mode="json"), None
         structure = sim.robot.structure_key(sim.scenario)
@@ -152,9 +155,10 @@ class TimeSimulation:
 
     def parameters_at(self, t):
         """The parameter vector the timeline gives at ``t`` [s] (heated TCAs' temperatures aside)."""
-        times = [k[0] for k in self._knots()]
-        vectors = [self.states[k[1]][1] for k in self._knots()]
-        return np.array([Schedule(tuple(times), tuple(v[i] for v in vectors))(t) for i in range(vectors[0].size)])
+        if self._parameter_schedule is None:
+            knots = self._knots()
+            self._parameter_schedule = Schedule(tuple(t for t, _ in knots), tuple(self.states[k][1] for _, k in knots))
+        return self._parameter_schedule(t)
 
     def drives(self):
         """One :class:`Drive` per heated TCA: its value's schedule from the timeline."""
