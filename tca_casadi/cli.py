@@ -118,6 +118,8 @@ def build_parser():
     simulate.add_argument("--duration", default=None, help="[s] (units allowed: '30 s'); default the scenario's")
     simulate.add_argument("--dt", default="0.1", help="output step [s] (default 0.1)")
     simulate.add_argument("--no-plot", action="store_true", help="no timeseries.png")
+    simulate.add_argument("--no-animation", action="store_true",
+                          help="no simulate.gif / simulate.mp4 (the robot in time, with a clock)")
     simulate.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser
 
@@ -187,6 +189,12 @@ def _print_thermal(scenario, robot):
         resistance = "" if law.resistance != law.resistance else f", R0 {law.resistance:.4g} ohm"
         print(f"  {actuator.key:<28} C {law.heat_capacity:.4g} J/K, G {law.conductance:.4g} W/K, "
               f"tau {law.time_constant:.3g} s{resistance}")
+    for module in scenario.modules:
+        if module.thermal_coupling is not None:
+            names = [a.name for a in module.actuators if a.kind == "tca"]
+            pairs = module.thermal_coupling.between or [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]
+            print(f"  {module.name}: {module.thermal_coupling.conductance:.4g} W/K between "
+                  + ", ".join(f"{a}-{b}" for a, b in pairs))
 
 
 def _solve(args):
@@ -347,14 +355,22 @@ def _simulate(args):
         raise ScenarioError(f"--duration/--dt: {exc}") from None
     timed = TimeSimulation(sim, duration=duration, dt=dt)
     plots = ["timeseries.png"]
+    movies = ["simulate.gif", "simulate.mp4"]
     output = prepare_directory(args.output or default_directory(sim.scenario.name, "simulate"),
-                               ["timeseries.csv", "simulation.json"] + plots, stale=plots if args.no_plot else [])
+                               ["timeseries.csv", "simulation.json"] + plots + movies,
+                               stale=(plots if args.no_plot else []) + (movies if args.no_animation else []))
     series = _with_progress(timed.run, "simulate", quiet=args.quiet)
     written = [series.to_csv(output / "timeseries.csv"), write_json(output / "simulation.json", timed.report(series))]
-    if not args.no_plot:
+    if not args.no_plot and series.solutions:
         from .plotting.timeseries import save_timeseries_png
         written.append(save_timeseries_png(series, output / "timeseries.png", [e.at for e in sim.scenario.timeline]))
     print(timed.summary(series))
+    if not args.no_animation and series.solutions:
+        from .plotting.animation import save_time_animation
+        paths, speed_up = _with_progress(lambda progress: save_time_animation(series, output, progress=progress),
+                                         "animation", quiet=args.quiet)
+        written += paths
+        print(f"animation at {'real time' if speed_up == 1 else f'{speed_up}x real time'}")
     print("wrote " + ", ".join(str(p) for p in written))
     return 0 if series.completed else 1
 

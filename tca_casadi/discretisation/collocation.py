@@ -49,7 +49,7 @@ class CollocationNLP:
         self.meshes = list(meshes) if meshes is not None else \
             [build_mesh(robot, m, intervals) for m in range(len(robot.modules))]
         self._declare_variables()
-        self.P = ca.MX.sym("P", robot.layout.size)
+        self.P = ca.MX.sym("P", self.parameter_size)
         self._g, self._lengths = [], [0] * len(robot.actuators)
         self._partial_exprs = []
         self._ends, self._base_wrenches = [], []
@@ -108,6 +108,11 @@ class CollocationNLP:
             self._states.append(ca.diag(ca.DM(self.node_scale[m])) @ matrix)
         self._tensions = blocks[-1] * ca.DM(scales[-1]) if len(unknowns) else ca.MX(0, 1)
 
+    @property
+    def parameter_size(self):
+        """Length of ``P``: the robot's parameter vector (a dynamic NLP appends its history)."""
+        return self.robot.layout.size
+
     def tension_of(self, actuator):
         """Symbolic tension [N] of an actuator: a variable when unknown, else a parameter."""
         if actuator.unknown_tension:
@@ -139,9 +144,13 @@ class CollocationNLP:
         active = self._active_mask(m, nodes[:, 0] + 0.5 * steps)[:, interval_of]   # (nA, npts)
         rod = rod_equations(module.xi_star, len(module.actuators)).map(len(colloc))
         stiffness = boundary.stiffness(module, self.param) @ ca.DM.ones(1, len(colloc))
+        loads = self._distributed(m, nodes[:, 0] + 0.5 * steps, interval_of)
+        inertial = self._inertial_loads(m, Xc, colloc)
+        if inertial is not None:                              # body-frame force and moment
+            loads[2], loads[3] = loads[2] + inertial[0], loads[3] + inertial[1]
         kin, eq, speed = rod(Xc, dX[7:13, :],
                              self._route_data(m, s_colloc, active), self._tension_field(m, active), stiffness,
-                             *self._distributed(m, nodes[:, 0] + 0.5 * steps, interval_of))
+                             *loads)
         fs, length = module.force_scale, module.length
         eq_scale = np.r_[np.ones(3), np.full(4, length), np.full(3, 1 / fs), np.full(3, length / fs)]
         self._g.append(ca.vec(ca.diag(ca.DM(eq_scale)) @ ca.vertcat(dX[0:7, :] - kin, eq)))
@@ -154,9 +163,19 @@ class CollocationNLP:
             position = self.robot.actuators.index(actuator)
             self._lengths[position] = ca.sum2(self._partials[m][k, :])
         ends = X @ ca.DM(_end_matrix(scheme, n_int))           # (13, n_int)
+        self._motion_constraints(m, Xc, colloc, derivative)
         self._link_intervals(m, ends, X[:, ((np.arange(1, n_int)) * (d + 1)).tolist()])
         self._ends.append(ends[:, -1])
         self._module_end(m, ends[:, -1])
+
+    def _inertial_loads(self, m, Xc, colloc):
+        """Body-frame inertial force and moment per unit length (3, npts) at the collocation
+        points ``colloc`` of module m, added to the distributed loads: none in statics (a
+        dynamic NLP's, :mod:`tca_casadi.discretisation.dynamics`)."""
+        return None
+
+    def _motion_constraints(self, m, Xc, colloc, derivative):
+        """The velocity states' equations of module m: none in statics."""
 
     def _route_data(self, m, s, active):
         """Route values ``[r; r'; r'']`` (9, nA npts) at the points ``s`` (zero where inactive),

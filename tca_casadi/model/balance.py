@@ -41,11 +41,12 @@ class GlobalBalance:
                 "relative": self.relative}
 
 
-def global_balance(robot, modules, params, tensions):
+def global_balance(robot, modules, params, tensions, extra_loads=None):
     """:class:`GlobalBalance` of a solution's ``modules`` (``ModuleResult`` list) at ``params``,
     with the actuators' ``tensions`` [N] (``robot.actuators`` order) in the scales: each
     actuator's internal loads are of the order of its tension (and its tension times the module's
-    length for moments), so that is what a residual is small against."""
+    length for moments), so that is what a residual is small against. ``extra_loads``:
+    ``(points, forces, moments)`` (3, k) global, further loads (a dynamic step's inertia)."""
     base = modules[0].p[:, 0]
     force, moment = modules[0].base_reaction["force"].copy(), modules[0].base_reaction["moment"].copy()
     pulls = [abs(float(t)) for t in tensions]
@@ -58,7 +59,13 @@ def global_balance(robot, modules, params, tensions):
         if hanger is not None:           # a decoupled subtree: its net force at its attachment
             points = modules[robot.modules[hanger].parent].p[:, -1:]
             forces, moments = forces.sum(axis=1, keepdims=True), np.zeros((3, 1))
-        arms = np.cross(points - base[:, None], forces, axis=0)
+        arms = _cross_columns(points - base[:, None], forces)
+        force, moment = force + forces.sum(axis=1), moment + arms.sum(axis=1) + moments.sum(axis=1)
+        force_scale += float(np.linalg.norm(forces, axis=0).sum())
+        moment_scale += float(np.linalg.norm(arms, axis=0).sum() + np.linalg.norm(moments, axis=0).sum())
+    if extra_loads is not None:
+        points, forces, moments = extra_loads
+        arms = _cross_columns(points - base[:, None], forces)
         force, moment = force + forces.sum(axis=1), moment + arms.sum(axis=1) + moments.sum(axis=1)
         force_scale += float(np.linalg.norm(forces, axis=0).sum())
         moment_scale += float(np.linalg.norm(arms, axis=0).sum() + np.linalg.norm(moments, axis=0).sum())
@@ -81,6 +88,12 @@ def _module_loads(robot, m, result, modules, value):
         if load.module == m:
             loads.append(_distributed_load(load, result, value))
     return tuple(np.hstack(parts) for parts in zip(*loads))
+
+
+def _cross_columns(a, b):
+    """Column-wise cross products of (3, k) arrays (``np.cross(a, b, axis=0)``, without its
+    axis shuffling)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 def _columns(*vectors):

@@ -99,6 +99,7 @@ class ParameterLayout:
             for key in TCA_THERMAL:
                 tca_type.pop(key, None)
         for module in data.get("modules", []):
+            module.pop("thermal_coupling", None)       # simulate's, never the statics'
             for actuator in module.get("actuators", []):
                 actuator.pop("drive", None)            # simulate's, never the statics'
         return data

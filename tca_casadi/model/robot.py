@@ -64,8 +64,29 @@ class ActuatorModel:
         return self.route.placed(np.atleast_1d(np.asarray(s, float)), *self.placement_of(param))
 
     def reference_length_of(self, param):
-        """``l*`` [m] at the parameters."""
-        return reference_path_length(self.route, self.xi_star, *self.placement_of(param))
+        """``l*`` [m] at the parameters (kept per placement: a quadrature along the route that
+        time runs and sweeps of other parameters would otherwise repeat at every point)."""
+        placement = self.placement_of(param)
+        if not all(isinstance(v, (float, int, np.number)) for v in placement):
+            return reference_path_length(self.route, self.xi_star, *placement)       # CasADi symbols
+        placement = tuple(float(v) for v in placement)
+        cache = self.__dict__.setdefault("_reference_lengths", {})
+        if placement not in cache:
+            if len(cache) >= 64:
+                cache.pop(next(iter(cache)))
+            cache[placement] = reference_path_length(self.route, self.xi_star, *placement)
+        return cache[placement]
+
+    def outside_body(self, section, param):
+        """Whether the route, at the placement in the parameters, leaves ``section`` (the
+        module's envelope or section); kept per placement."""
+        placement = tuple(float(v) for v in self.placement_of(param))
+        cache = self.__dict__.setdefault("_outside", {})
+        if placement not in cache:
+            if len(cache) >= 64:
+                cache.pop(next(iter(cache)))
+            cache[placement] = outside_point(section, self.route.moved(*placement)) is not None
+        return cache[placement]
 
     def law_of(self, param):
         """The actuator's law (:class:`TcaLaw`, :class:`TendonLaw` or None) with its constants
@@ -256,13 +277,25 @@ class Robot:
         """The robot with every parameter-dependent attribute (stiffness, weight density, routes,
         laws, reference lengths) evaluated at ``params``; same structure and layout (the last
         few are kept: post-processing asks for the same parameters repeatedly)."""
-        key = np.asarray(params, float).tobytes()
+        params = np.asarray(params, float)
+        key = self._without_drive_values(params)
         cache = self.__dict__.setdefault("_at_cache", {})
         if key not in cache:
             if len(cache) >= 8:
                 cache.pop(next(iter(cache)))
             cache[key] = self._evaluated(params)
-        return cache[key]
+        evaluated = cache[key]
+        return Robot(evaluated.modules, evaluated.actuators, self.point_loads, self.distributed_loads, self.layout,
+                     params, self.name)
+
+    def _without_drive_values(self, params):
+        """``params`` (bytes) with each actuator's own value (TCA temperature, tendon tension or
+        displacement) zeroed: the key of what :meth:`at` evaluates, which never reads them
+        (time runs and sweeps of temperatures re-use one evaluation)."""
+        key = np.array(params, float)
+        for actuator in self.actuators:
+            key[self.layout[actuator.parameter]] = 0.0
+        return key.tobytes()
 
     def _evaluated(self, params):
         param = self.param_function(params)
@@ -284,6 +317,24 @@ class Robot:
         moduli or TCA sizes out of range, a TCA temperature outside its law's range, a route
         outside the body. Checked by sweeps and
         inverse statics, which move parameters without validating a scenario."""
+        params = np.asarray(params, float)
+        key = self._without_drive_values(params)
+        cache = self.__dict__.setdefault("_problem_cache", {})
+        if key not in cache:            # all but the temperatures: kept (time runs change only those)
+            if len(cache) >= 16:
+                cache.pop(next(iter(cache)))
+            cache[key] = self._structural_problems(params)
+        out = list(cache[key])
+        for actuator in self.tcas:           # the range is the type's, never a parameter
+            temperature = float(params[self.layout[actuator.parameter]][0])
+            low, high = actuator.law.min_temperature, actuator.law.max_temperature
+            if not low <= temperature <= high:
+                out.append(f"{actuator.key} at {temperature:.6g} degC is outside its TCA type's range "
+                           f"({low:g} to {high:g} degC, the range its law is validated for)")
+        return out
+
+    def _structural_problems(self, params):
+        """:meth:`problems` but for the TCA temperatures."""
         param, out = self.param_function(params), []
         for module in self.modules:
             youngs, shear = module.moduli_of(param)
@@ -301,18 +352,13 @@ class Robot:
                     out.append(f"{actuator.key}: pitch_angle {law.pitch_angle:g} rad is outside (0, pi/2)")
                 if not law.shear_coefficients[2] > 0:
                     out.append(f"{actuator.key}: shear_modulus.a0 must be positive")
-                temperature = float(param(actuator.parameter)[0])
-                if not law.min_temperature <= temperature <= law.max_temperature:
-                    out.append(f"{actuator.key} at {temperature:.6g} degC is outside its TCA type's range "
-                               f"({law.min_temperature:g} to {law.max_temperature:g} degC, the range its law is "
-                               "validated for)")
             if actuator.placement_keys:
                 radius = actuator.placement_of(param)[0]
                 if radius < 0 or (radius == 0 and actuator.route.kind == "helix"):
                     out.append(f"{actuator.key}: route radius {radius:g} m must be positive")
                     continue
             section = self.modules[actuator.module].section
-            if outside_point(section.envelope or section, actuator.route.moved(*actuator.placement_of(param))) is not None:
+            if actuator.outside_body(section.envelope or section, param):
                 out.append(f"{actuator.key}: the route passes outside the body")
         return out
 

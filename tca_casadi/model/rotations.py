@@ -2,6 +2,8 @@
 
 Every function accepts CasADi symbols (SX/MX) or numbers; ``R(h)`` is a rotation for any h != 0.
 """
+import functools
+
 import casadi as ca
 import numpy as np
 
@@ -36,6 +38,21 @@ def quaternion_product(a, b):
 _h = ca.SX.sym("h", 4)
 #: CasADi Function ``R = rotation(h)``
 ROTATION = ca.Function("rotation", [_h], [rotation_matrix(_h)], ["h"], ["R"])
+
+
+@functools.lru_cache(maxsize=64)
+def _mapped_rotation(n):
+    from ..solvers.newton import BufferedFunction
+    return BufferedFunction(ROTATION.map(n))
+
+
+def rotations_of(h):
+    """:data:`ROTATION` of ``n`` quaternions ``h`` (4, n) as an array (3, 3, n) (the mapped
+    Function built once per ``n``, evaluated into buffers)."""
+    h = np.asarray(h, float)
+    n = h.shape[1]
+    values = _mapped_rotation(n)(h.ravel(order="F"))[0]           # R_k column-major, side by side
+    return values.reshape(3, 3, n, order="F").copy()
 
 
 def rotation_numpy(h):

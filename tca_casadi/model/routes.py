@@ -25,8 +25,19 @@ class RouteGeometry:
     params: dict = field(default_factory=dict)
 
     def evaluate(self, s):
+        """``(r, dr, ddr)`` at arc lengths ``s`` [m], each (3, n); the last few grids' values
+        are kept (a solver's nodes do not move). Do not modify the arrays returned."""
         s = np.atleast_1d(np.asarray(s, dtype=float))
-        return _EVALUATORS[self.kind](self, s)
+        cache = self.__dict__.setdefault("_evaluated", {})
+        key = s.tobytes()
+        if key not in cache:
+            if len(cache) >= 8:
+                cache.pop(next(iter(cache)))
+            values = _EVALUATORS[self.kind](self, s)
+            for array in values:
+                array.flags.writeable = False
+            cache[key] = values
+        return cache[key]
 
     def samples(self, count=200):
         """``r`` at ``count`` points across the span, shape (3, count)."""

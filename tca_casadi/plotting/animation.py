@@ -1,5 +1,6 @@
-"""Frames and animations of a sequence: one PNG per step, and a GIF (MP4 too where ffmpeg
-exists) that plays the transitions between steps."""
+"""Frames and animations: a sequence's steps (one PNG per step, and a GIF, MP4 too where
+ffmpeg exists, that plays the transitions between steps) and a ``simulate`` run in time (a GIF
+and MP4 with a clock, at real time or a stated speed-up)."""
 import shutil
 from pathlib import Path
 
@@ -33,7 +34,6 @@ def save_step_pngs(result, directory):
 def save_animation(result, directory, fps=8, progress=None):
     """``sequence.gif`` (and ``sequence.mp4`` when ffmpeg is on the PATH): every transition
     frame and every step. Returns the paths written."""
-    from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     plt = _pyplot()
@@ -56,16 +56,85 @@ def save_animation(result, directory, fps=8, progress=None):
             progress((index + 1) / len(frames), title)
         return []
 
-    animation = FuncAnimation(fig, draw, frames=len(frames), blit=False)
-    paths = [directory / "sequence.gif"]
-    with atomic_path(paths[0]) as temporary:
-        animation.save(temporary, writer=PillowWriter(fps=fps))
-    if shutil.which("ffmpeg"):
-        paths.append(directory / "sequence.mp4")
-        with atomic_path(paths[1]) as temporary:
-            animation.save(temporary, writer=FFMpegWriter(fps=fps))
+    paths = _save_movies(fig, draw, len(frames), directory / "sequence", fps)
     plt.close(fig)
     return paths
+
+
+def _save_movies(fig, draw, count, stem, fps):
+    """Animate ``draw(frame)`` over ``count`` frames of ``fig`` into ``STEM.gif`` (and
+    ``STEM.mp4`` when ffmpeg is on the PATH), each written atomically; returns the paths."""
+    from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
+    animation = FuncAnimation(fig, draw, frames=count, blit=False)
+    writers = [(stem.with_suffix(".gif"), PillowWriter)]
+    if shutil.which("ffmpeg"):
+        writers.append((stem.with_suffix(".mp4"), FFMpegWriter))
+    for path, writer in writers:
+        with atomic_path(path) as temporary:
+            animation.save(temporary, writer=writer(fps=fps))
+    return [path for path, _ in writers]
+
+
+#: speed-ups a time animation may use (the smallest that keeps it within its frame budget)
+SPEED_UPS = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
+
+
+def animation_speed_up(duration, fps, max_frames):
+    """The smallest of :data:`SPEED_UPS` that shows ``duration`` [s] in at most ``max_frames``
+    frames at ``fps``."""
+    return next((k for k in SPEED_UPS if duration * fps / k <= max_frames), SPEED_UPS[-1])
+
+
+def frame_indices(t, fps, speed_up):
+    """For frames ``1 / fps`` apart in the animation (``speed_up / fps`` apart in time), the
+    index of the last output time ``t`` (n,) [s] at or before each frame's time; the last
+    output is always the last frame."""
+    t = np.asarray(t, float)
+    clock = np.arange(t[0], t[-1] + 1e-9, speed_up / fps)
+    indices = np.searchsorted(t, clock + 1e-9, side="right") - 1
+    return np.append(indices, len(t) - 1) if indices[-1] != len(t) - 1 else indices
+
+
+def save_time_animation(series, directory, fps=10, max_frames=150, progress=None):
+    """``simulate.gif`` (and ``simulate.mp4`` when ffmpeg is on the PATH) of a ``simulate``
+    :class:`~tca_casadi.studies.heating.TimeSeries`: the robot at the solved output times, at
+    real time or the smallest speed-up of :data:`SPEED_UPS` that fits ``max_frames`` frames,
+    with a clock and the temperatures of the heated TCAs that are warm (0.5 K above the run's
+    lowest temperature). Returns ``(paths, speed_up)``."""
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    n = len(series.solutions)
+    t = series.t[:n]
+    speed_up = animation_speed_up(t[-1] - t[0], fps, max_frames)
+    frames = frame_indices(t, fps, speed_up)
+    heated = [j for j in range(len(series.keys)) if not np.all(np.isnan(series.powers[:n, j]))]
+    ambient = float(np.nanmin(series.temperatures[:n])) if n else 0.0
+    points = [m.p for s in series.solutions for m in s.modules]
+    points += [pose.corners() for poses in series.objects for pose in poses.values()]
+    every = np.hstack(points) * 1e3
+    limits = every.min(axis=1), every.max(axis=1)
+    plt = _pyplot()
+    fig = plt.figure(figsize=(5.6, 5.6))
+    ax = fig.add_subplot(projection="3d")
+    pace = "real time" if speed_up == 1 else f"{speed_up}x real time"
+
+    def draw(frame):
+        ax.clear()
+        k = frames[frame]
+        warm = [f"{series.keys[j]} {series.temperatures[k, j]:.0f} degC" for j in heated
+                if series.temperatures[k, j] > ambient + 0.5][:6]          # the TCAs that are warm now
+        temperatures = "\n".join("  ".join(warm[i:i + 3]) for i in range(0, len(warm), 3))
+        objects = series.objects[k].values() if series.objects else ()
+        draw_robot(series.solutions[k], ax=ax, objects=objects,
+                   title=f"t = {t[k]:6.1f} s   ({pace})" + (f"\n{temperatures}" if temperatures else ""))
+        _fix_limits(ax, limits)
+        if progress is not None:
+            progress((frame + 1) / len(frames), f"frame {frame + 1}/{len(frames)}")
+        return []
+
+    paths = _save_movies(fig, draw, len(frames), directory / "simulate", fps)
+    plt.close(fig)
+    return paths, speed_up
 
 
 def _limits(result):

@@ -12,10 +12,16 @@ _MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*"]
 _DASHES = ["-", "--", "-.", ":"]
 
 
-def line_style(k):
-    """Keyword arguments of ``plot`` for the k-th curve of a panel."""
-    return {"marker": _MARKERS[k % len(_MARKERS)], "linestyle": _DASHES[k % len(_DASHES)],
-            "markersize": max(9 - 1.5 * (k % 4), 3), "markerfacecolor": "none", "linewidth": 1.3}
+def line_style(k, points=None):
+    """Keyword arguments of ``plot`` for the k-th curve of a panel; with ``points`` (the curve's
+    length), markers on about 12 of them only (staggered per curve), so that long curves stay
+    lines."""
+    style = {"marker": _MARKERS[k % len(_MARKERS)], "linestyle": _DASHES[k % len(_DASHES)],
+             "markersize": max(9 - 1.5 * (k % 4), 3), "markerfacecolor": "none", "linewidth": 1.3}
+    if points is not None and points > 24:
+        every = points // 12
+        style["markevery"] = (k * every // 7 % every, every)
+    return style
 
 
 def plot_sweep(result, path):

@@ -101,6 +101,22 @@ def _check_module(scenario, index, module, raw, sources):
             if problem:
                 fail(raw, sources, a_path + ("temperature",), problem)
         _check_span(route_span(actuator.route, module.length), module, a_path + ("route",), raw, sources)
+    _check_coupling(module, path, raw, sources)
+
+
+def _check_coupling(module, path, raw, sources):
+    """``thermal_coupling.between``: pairs of two different TCAs of this module."""
+    coupling = module.thermal_coupling
+    if coupling is None or coupling.between is None:
+        return
+    tcas = [a.name for a in module.actuators if a.kind == "tca"]
+    for k, pair in enumerate(coupling.between):
+        for j, name in enumerate(pair):
+            if name not in tcas:
+                fail(raw, sources, path + ("thermal_coupling", "between", k, j),
+                     f"not a TCA of module {module.name!r}: {name!r}{closest(name, tcas)}")
+        if pair[0] == pair[1]:
+            fail(raw, sources, path + ("thermal_coupling", "between", k), "a TCA cannot be coupled to itself")
 
 
 def temperature_problem(temperature, tca_type, type_name):

@@ -1,11 +1,13 @@
 """Turn a solver's raw result (node states, tensions, lengths) into a :class:`Solution`.
 Shared by every solver so that all report the same quantities the same way."""
+import functools
+
 import numpy as np
 
 from ..errors import PhysicsWarning
 from ..model.balance import global_balance, load_markers
 from ..model.compatibility import slack_length
-from ..model.rotations import ROTATION
+from ..model.rotations import rotations_of
 from ..solution import ActuatorResult, ModuleResult, Solution
 
 #: a TCA tension below this [N] counts as compression
@@ -17,8 +19,7 @@ BALANCE_TOLERANCE = 1e-6
 def module_result(module, s, states, base_wrench_body, weights):
     """:class:`ModuleResult` from node states (13, n) at arc lengths s (n,) with the solver's
     quadrature weights (n,) [m]."""
-    n = states.shape[1]
-    R = np.array(ROTATION.map(n)(states[3:7])).reshape(3, n, 3).transpose(0, 2, 1)   # (3, 3, n)
+    R = rotations_of(states[3:7])                                            # (3, 3, n)
     wrench = module.stiffness[:, None] * (states[7:13] - module.xi_star[:, None])
     moment = np.einsum("ijk,jk->ik", R, wrench[0:3])
     force = np.einsum("ijk,jk->ik", R, wrench[3:6])
@@ -29,14 +30,23 @@ def module_result(module, s, states, base_wrench_body, weights):
 
 
 def section_outline(section, points=48):
-    """Body-frame polygon (3, k) of the body's outline (the envelope where one is given)."""
+    """Body-frame polygon (3, k) of the body's outline (the envelope where one is given); read
+    only (one array per outline, shared by every solution)."""
     outline = section.envelope or section
     if outline.shape == "circle":
+        return _outline("circle", outline.diameter / 2, 0.0, points)
+    return _outline("rectangle", outline.width / 2, outline.height / 2, points)
+
+
+@functools.lru_cache(maxsize=64)
+def _outline(shape, a, b, points):
+    if shape == "circle":
         angle = np.linspace(0, 2 * np.pi, points)
-        radius = outline.diameter / 2
-        return np.vstack([radius * np.cos(angle), radius * np.sin(angle), np.zeros(points)])
-    w, h = outline.width / 2, outline.height / 2
-    return np.array([[-w, w, w, -w, -w], [-h, -h, h, h, -h], [0, 0, 0, 0, 0]], dtype=float)
+        polygon = np.vstack([a * np.cos(angle), a * np.sin(angle), np.zeros(points)])
+    else:
+        polygon = np.array([[-a, a, a, -a, -a], [-b, -b, b, b, -b], [0, 0, 0, 0, 0]], dtype=float)
+    polygon.flags.writeable = False
+    return polygon
 
 
 def actuator_result(actuator, module_res, tension, length, parameter):
@@ -82,11 +92,13 @@ def physics_warnings(robot, actuators):
     return out
 
 
-def build_solution(robot, params, module_data, tensions, lengths, result, method, raw, notices=()):
+def build_solution(robot, params, module_data, tensions, lengths, result, method, raw, notices=(), extra_loads=None):
     """Solution from ``module_data = [(s, states, base_wrench_body, weights), ...]``, tensions per
     actuator (list in ``robot.actuators`` order) and lengths; ``result`` the
     :class:`SolveStatus`, ``method`` the solver's name, ``raw`` its variables (``w`` or ``z``),
-    ``notices`` the solver's own :class:`PhysicsWarning` s (e.g. a floored tolerance)."""
+    ``notices`` the solver's own :class:`PhysicsWarning` s (e.g. a floored tolerance);
+    ``extra_loads``: ``(points, forces, moments)`` (3, k) global, beyond the robot's own loads,
+    for the global balance (a dynamic step's inertial loads)."""
     robot = robot.at(params)          # stiffness, routes, laws at these parameters
     modules = [module_result(robot.modules[m], *data) for m, data in enumerate(module_data)]
     actuators = {}
@@ -95,7 +107,7 @@ def build_solution(robot, params, module_data, tensions, lengths, result, method
         actuators[actuator.key] = actuator_result(actuator, modules[actuator.module], tensions[k],
                                                   lengths[k], parameter)
     warnings = physics_warnings(robot, actuators)
-    balance = global_balance(robot, modules, params, tensions)
+    balance = global_balance(robot, modules, params, tensions, extra_loads)
     if result.success and balance.relative > BALANCE_TOLERANCE:
         warnings.append(PhysicsWarning("global_balance", f"global balance off by {balance.relative:.1e} of the forces in play "
                         f"(force {np.abs(balance.force).max():.2e} N, moment "

@@ -11,7 +11,7 @@ from ..discretisation import CollocationNLP
 from ..status import SolveStatus, Status
 from .assemble import build_solution
 from .guess import reference_guess
-from .newton import SquareSystem
+from .newton import BufferedFunction, SquareSystem
 
 log = logging.getLogger(__name__)
 
@@ -33,12 +33,14 @@ class CollocationSolver:
     #: and an error estimate against degree d + 1 (accuracy control)
     has_square_system = True
     estimates_error = True
+    #: the NLP it builds (a dynamic time step's: :class:`~tca_casadi.solvers.dynamics.DynamicSolver`)
+    nlp_class = CollocationNLP
 
     def __init__(self, robot, options, meshes=None, degree=None, structure=None):
         start = time.perf_counter()
         self.robot, self.options, self.structure = robot, options, structure
         self.degree = degree or options.degree
-        self.nlp = CollocationNLP(robot, options.intervals, self.degree, options.scheme, meshes)
+        self.nlp = self.nlp_class(robot, options.intervals, self.degree, options.scheme, meshes)
         self._constraints = ca.Function("nlp_g", [self.nlp.w, self.nlp.P], [self.nlp.problem["g"]]).expand()
         w, P = ca.SX.sym("w", self.nlp.w.numel()), ca.SX.sym("P", self.nlp.P.numel())
         g = self._constraints(w, P)                   # the Jacobian of the expanded (SX) residual
@@ -142,7 +144,11 @@ class CollocationSolver:
     def square(self):
         """The :class:`SquareSystem` (residual, sparse Jacobian, Newton) of this NLP."""
         if self._square is None:
-            self._square = SquareSystem(self.nlp, self._constraints, self._jacobian)
+            fast = None
+            if getattr(self.options, "jit", False):
+                from .compiled import compiled
+                fast = compiled(self._constraints)
+            self._square = SquareSystem(self.nlp, self._constraints, self._jacobian, compiled_residual=fast)
         return self._square
 
     def linearise(self, w, params):
@@ -173,23 +179,45 @@ class CollocationSolver:
         """Largest scaled constraint violation at ``(w, params)``."""
         return float(np.max(np.abs(np.array(self._constraints(w, params))))) if np.size(w) else 0.0
 
+    def _outputs_at(self, w, params):
+        """``(lengths, ends, base_wrenches)`` of the NLP's ``outputs`` as numpy arrays (dense
+        outputs into preallocated buffers)."""
+        outputs = self.nlp.outputs
+        if any(outputs.nnz_out(k) != outputs.numel_out(k) for k in range(outputs.n_out())):
+            return tuple(np.array(v) for v in outputs(w, params))
+        if getattr(self, "_buffered_outputs", None) is None:
+            self._buffered_outputs = BufferedFunction(outputs)
+        values = self._buffered_outputs(w, params)
+        return tuple(v.reshape(outputs.size_out(k), order="F").copy() for k, v in enumerate(values))
+
+    def _node_layout(self):
+        """Per module: the state indices (13, nodes) into ``w``, the nodes' arc lengths with the
+        tip appended (nodes + 1,) [m] and their quadrature weights; computed once."""
+        if getattr(self, "_nodes", None) is None:
+            nlp = self.nlp
+            self._nodes = [(nlp.state_index[m].transpose(1, 0, 2).reshape(13, -1),        # (n_int, 13, d+1)
+                            np.append(nlp.node_s(m).ravel(), module.length), nlp.node_weights(m))
+                           for m, module in enumerate(self.robot.modules)]
+        return self._nodes
+
     def _assemble(self, w, params, status):
         nlp = self.nlp
-        lengths, ends, base = (np.array(v) for v in nlp.outputs(w, params))
+        lengths, ends, base = self._outputs_at(w, params)
         w_phys = w * nlp.scale
         module_data = []
-        for m in range(len(self.robot.modules)):
-            idx = nlp.state_index[m]                               # (n_int, 13, d+1)
-            states = w_phys[idx.transpose(1, 0, 2).reshape(13, -1)]
-            s = nlp.node_s(m).ravel()
-            states = np.hstack([states, ends[:, m:m + 1]]) + nlp.state_offset[m][:, None]
-            s = np.append(s, self.robot.modules[m].length)
-            module_data.append((s, states, base[:, m], nlp.node_weights(m)))
+        for m, (index, s, weights) in enumerate(self._node_layout()):
+            states = np.hstack([w_phys[index], ends[:, m:m + 1]]) + nlp.state_offset[m][:, None]
+            module_data.append((s, states, base[:, m], weights))
         tensions = []
         for actuator in self.robot.actuators:
             if actuator.unknown_tension:
                 tensions.append(w_phys[nlp.tension_index[self.robot.unknowns.index(actuator)]])
             else:
                 tensions.append(params[self.robot.layout[actuator.parameter]][0])
-        return build_solution(self.robot, params, module_data, tensions, lengths.ravel(), status,
-                              self.method, {"w": w})
+        robot_params = params[:self.robot.layout.size]
+        return build_solution(self.robot, robot_params, module_data, tensions, lengths.ravel(), status,
+                              self.method, {"w": w}, extra_loads=self._extra_loads(w, params, module_data))
+
+    def _extra_loads(self, w, params, module_data):
+        """Loads beyond the robot's own for the global balance (a dynamic step's inertia)."""
+        return None

@@ -37,12 +37,15 @@ class Linearisation:
 
     def determinant_sign(self):
         """Sign (+1, -1; 0 if singular) of ``det J_w``: a change between two points of a branch
-        means a fold or a bifurcation lies between them."""
-        diagonal = self.lu.U.diagonal()
-        if np.any(diagonal == 0):
-            return 0
-        sign = np.prod(np.sign(diagonal))
-        return int(sign * _parity(self.lu.perm_r) * _parity(self.lu.perm_c))
+        means a fold or a bifurcation lies between them. Computed once."""
+        if getattr(self, "_sign", None) is None:
+            diagonal = self.lu.U.diagonal()
+            if np.any(diagonal == 0):
+                self._sign = 0
+            else:
+                sign = np.prod(np.sign(diagonal))
+                self._sign = int(sign * _parity(self.lu.perm_r) * _parity(self.lu.perm_c))
+        return self._sign
 
     def smallest_singular_value(self, iterations=6, seed=0):
         """Estimate of ``sigma_min(J_w)`` by inverse iteration on ``J_w^T J_w`` (two sparse
@@ -64,8 +67,19 @@ def _parity(permutation):
     as connected components of the permutation's graph."""
     permutation = np.asarray(permutation)
     n = permutation.size
-    if np.array_equal(permutation, np.arange(n)):      # the natural column order: even
+    moved = np.flatnonzero(permutation != np.arange(n))
+    if moved.size == 0:                                 # the identity (natural column order): even
         return 1
+    if moved.size <= 64:                                # few pivots moved rows: follow their cycles
+        seen, transpositions = set(), 0
+        for start in moved.tolist():
+            length, k = 0, start
+            while k not in seen:
+                seen.add(k)
+                k = int(permutation[k])
+                length += 1
+            transpositions += max(length - 1, 0)
+        return -1 if transpositions % 2 else 1
     graph = sp.csr_matrix((np.ones(n), (np.arange(n), permutation)), shape=(n, n))
     cycles = connected_components(graph, directed=True, connection="weak")[0]
     return -1 if (n - cycles) % 2 else 1

@@ -42,13 +42,14 @@ class BufferedFunction:
 
 class SquareSystem:
     """``g`` and ``J_w = dg/dw`` at ``(w, P)`` for the NLP ``nlp``, from the Functions
-    ``residual (w, P) -> g`` and ``jacobian (w, P) -> (g, J_w)``."""
+    ``residual (w, P) -> g`` and ``jacobian (w, P) -> (g, J_w)``; ``compiled_residual``: the
+    residual as compiled code (:mod:`.compiled`), used for numeric evaluation instead."""
 
-    def __init__(self, nlp, residual, jacobian):
+    def __init__(self, nlp, residual, jacobian, compiled_residual=None):
         self.nlp = nlp
         self._residual_function = residual
         self._with_jacobian = BufferedFunction(jacobian)
-        self._residual = BufferedFunction(residual)
+        self._residual = BufferedFunction(compiled_residual or residual)
         self._jacobian_pattern = CscPattern(jacobian.sparsity_out(1))
         self.shape = self._jacobian_pattern.shape
         self._sensitivity = None

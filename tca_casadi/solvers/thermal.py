@@ -88,25 +88,92 @@ class ThermalHistory:
     energy_in: np.ndarray       # int P dt from t[0], per TCA [J]
     energy_lost: np.ndarray     # int G (T - T_amb) dt from t[0], per TCA [J]
     heat_capacity: np.ndarray   # (number of TCAs,) [J/K]
+    energy_exchanged: np.ndarray = None   # int sum_j G_ij (T_i - T_j) dt, to the neighbours [J]
 
     def heat_balance_residual(self):
-        """``E_in - C (T - T_0) - E_lost`` per TCA at every output time [J], (n, number of
-        TCAs) (zero up to the integrator's error)."""
+        """``E_in - C (T - T_0) - E_lost - E_exchanged`` per TCA at every output time [J],
+        (n, number of TCAs) (zero up to the integrator's error)."""
         stored = (self.temperature - self.temperature[0]) * self.heat_capacity
-        return self.energy_in - stored - self.energy_lost
+        exchanged = 0.0 if self.energy_exchanged is None else self.energy_exchanged
+        return self.energy_in - stored - self.energy_lost - exchanged
 
 
-def integrate(laws, drives, ambient, initial, outputs, rtol=1e-11, atol=1e-11):
-    """Integrate ``C dT/dt = P(t, T) - G (T - T_amb)`` for each TCA (``laws``:
-    :class:`ThermalLaw` s, ``drives``: :class:`Drive` s, ``initial`` temperatures [degC], or
-    ``(T, I)`` pairs with the controllers' integral states, e.g. from
-    :meth:`Drive.initial_state`) and report at the increasing ``outputs`` [s] (the first is the
-    start). Returns a :class:`ThermalHistory`."""
+def exchange_matrix(coupling, count):
+    """The (count, count) matrix ``L`` with ``(L T)_i = sum_j G_ij (T_i - T_j)`` [W/K] (a graph
+    Laplacian) from the symmetric conductances ``coupling`` (None: no coupling)."""
+    if coupling is None:
+        return np.zeros((count, count))
+    G = np.asarray(coupling, float)
+    return np.diag(G.sum(axis=1)) - G
+
+
+def steady_state(laws, drives, ambient, coupling=None):
+    """Every TCA's ``(T, I)`` before any event (``I``: a setpoint drive's integral state).
+    Uncoupled, each from :meth:`Drive.initial_state` (closed forms). Coupled, the root of
+    ``P_i(T_i) = G_i (T_i - T_amb) + (L T)_i`` with setpoint drives holding their setpoint
+    while their power stays within ``[0, max_power]`` (else held at the limit): an active-set
+    loop of scipy roots started from the uncoupled state."""
+    from scipy.optimize import root
+    states = np.array([d.initial_state(law, ambient) for law, d in zip(laws, drives)], float).reshape(len(laws), 2)
+    L = exchange_matrix(coupling, len(laws))
+    if not np.any(L):
+        return states
+    G = np.array([law.conductance for law in laws])
+    setpoint = np.array([d.kind == "setpoint" for d in drives])
+    values = np.array([d.schedule(0.0, left=True) for d in drives])
+    clamped = {}                                         # setpoint drive index -> the power it is held at
+    for _ in range(len(laws) + 1):
+        holds = setpoint & ~np.isin(np.arange(len(laws)), list(clamped))
+
+        def temperatures(free):
+            T = np.where(holds, values, 0.0)
+            T[~holds] = free
+            return T
+
+        def residual(free):
+            T = temperatures(free)
+            power = np.array([clamped.get(j, 0.0) if d.kind == "setpoint" else float(law.power(d.kind, values[j], T[j]))
+                              for j, (law, d) in enumerate(zip(laws, drives))])
+            return (power - G * (T - ambient) - L @ T)[~holds]
+
+        free = states[~holds, 0]
+        if free.size:
+            found = root(residual, free)
+            free = found.x
+            if np.max(np.abs(residual(free))) > 1e-12 * max(1.0, float(np.max(np.abs(G[~holds] * free)))):
+                raise RuntimeError(f"no coupled thermal steady state: {found.message}")
+        T = temperatures(free)
+        needed = G * (T - ambient) + L @ T
+        beyond = [j for j in np.flatnonzero(holds) if needed[j] > drives[j].max_power or needed[j] < 0]
+        if not beyond:
+            break
+        for j in beyond:
+            clamped[j] = min(max(needed[j], 0.0), drives[j].max_power)
+    for j, d in enumerate(drives):
+        states[j, 0] = T[j]
+        if d.kind == "setpoint":
+            power = clamped.get(j, needed[j])
+            states[j, 1] = (power - d.proportional * (values[j] - T[j])) / d.integral
+        else:
+            states[j, 1] = 0.0
+    return states
+
+
+def integrate(laws, drives, ambient, initial, outputs, coupling=None, rtol=1e-11, atol=1e-11, step=None):
+    """Integrate ``C_i dT_i/dt = P_i(t, T_i) - G_i (T_i - T_amb) - sum_j G_ij (T_i - T_j)`` for
+    each TCA (``laws``: :class:`ThermalLaw` s, ``drives``: :class:`Drive` s, ``coupling``:
+    the symmetric (count, count) conductances ``G_ij`` [W/K] between TCAs, None for none;
+    ``initial`` temperatures [degC], or ``(T, I)`` pairs with the controllers' integral states,
+    e.g. from :func:`steady_state`) and report at the increasing ``outputs`` [s] (the first is
+    the start). Adaptive DOP853 (order 8) to ``rtol``/``atol``; ``step`` [s]: fixed steps of
+    that size instead (no error control; for convergence studies), each piece between two
+    breakpoints split into equal steps no longer than ``step``. Returns a
+    :class:`ThermalHistory`."""
     outputs = np.asarray(outputs, float)
     count = len(laws)
     capacity = np.array([law.heat_capacity for law in laws])
-
     conductance = np.array([law.conductance for law in laws])
+    L = exchange_matrix(coupling, count)
 
     def powers_and_rates(t, temperature, integral, left=False):
         """Electrical powers (count,) and the controllers' ``dI/dt`` (count,)."""
@@ -119,36 +186,39 @@ def integrate(laws, drives, ambient, initial, outputs, rtol=1e-11, atol=1e-11):
                 power[j] = float(law.power(drive.kind, value, temperature[j]))
         return power, rate
 
-    def powers(t, temperature, integral, left=False):
-        return powers_and_rates(t, temperature, integral, left)[0]
-
     def rhs_from(start):
         """The right-hand side on a piece starting at ``start``: drives take their values from
         inside the piece (the limit from the left at its end), never the next piece's."""
         def rhs(t, y):
-            temperature, integral = y[:count], y[3 * count:]
+            temperature, integral = y[:count], y[3 * count:4 * count]
             power, rate = powers_and_rates(t, temperature, integral, left=t > start)
             lost = conductance * (temperature - ambient)
-            return np.concatenate([(power - lost) / capacity, power, lost, rate])
+            exchanged = L @ temperature
+            return np.concatenate([(power - lost - exchanged) / capacity, power, lost, rate, exchanged])
         return rhs
 
     cuts = sorted({b for d in drives for b in d.schedule.breakpoints if outputs[0] < b < outputs[-1]})
     edges = [outputs[0], *cuts, outputs[-1]]
     initial = np.asarray(initial, float).reshape(count, -1)          # (count,) T or (count, 2) T and I
     integral0 = initial[:, 1] if initial.shape[1] > 1 else np.zeros(count)
-    y = np.concatenate([initial[:, 0], np.zeros(2 * count), integral0])
-    states = np.empty((outputs.size, 4 * count))
+    y = np.concatenate([initial[:, 0], np.zeros(2 * count), integral0, np.zeros(count)])
+    states = np.empty((outputs.size, 5 * count))
     states[0] = y
     for start, end in zip(edges[:-1], edges[1:]):
         inside = (outputs > start) & (outputs <= end)
         times = np.union1d(outputs[inside], [end])
-        solution = solve_ivp(rhs_from(start), (start, end), y, method="DOP853", t_eval=times, rtol=rtol, atol=atol)
+        if step is None:
+            options = {"rtol": rtol, "atol": atol}
+        else:                      # equal steps: never rejected (huge tolerances), never longer than max_step
+            size = (end - start) / max(1, int(np.ceil((end - start) / step - 1e-9)))
+            options = {"rtol": 1e6, "atol": 1e6, "first_step": size, "max_step": size}
+        solution = solve_ivp(rhs_from(start), (start, end), y, method="DOP853", t_eval=times, **options)
         if not solution.success:
             raise RuntimeError(f"thermal integration failed between {start:g} s and {end:g} s: {solution.message}")
         states[inside] = solution.y.T[np.isin(times, outputs[inside])]
         y = solution.y[:, -1]
     temperature = states[:, :count]
-    power = np.array([powers(t, y[:count], y[3 * count:]) for t, y in zip(outputs, states)]).reshape(outputs.size, count)
+    power = np.array([powers_and_rates(t, y[:count], y[3 * count:4 * count])[0]
+                      for t, y in zip(outputs, states)]).reshape(outputs.size, count)
     return ThermalHistory(outputs, temperature, power, states[:, count:2 * count], states[:, 2 * count:3 * count],
-                          capacity)
-
+                          capacity, states[:, 4 * count:])

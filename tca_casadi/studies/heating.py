@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model.rotations import matrix_to_quaternion
-from ..solvers.continuation import BranchFollower
+from ..solvers.continuation import BranchFollower, _slack_pattern
 
 
 @dataclass
@@ -24,6 +24,8 @@ class TimeSeries:
     powers: np.ndarray
     solutions: list = field(default_factory=list)
     message: str = ""
+    objects: list = field(default_factory=list)      # per solved output: {name: ObjectPose} (scenario objects)
+    warnings: list = field(default_factory=list)     # PhysicsWarning s (e.g. a grasp not across the object)
 
     @property
     def completed(self):
@@ -37,11 +39,15 @@ class TimeSeries:
         columns = ["t [s]"]
         for key in self.keys:
             columns += [f"{key}.temperature [degC]", f"{key}.power [W]", f"{key}.tension [N]", f"{key}.stroke [m]"]
-        return columns + ["tip_x [m]", "tip_y [m]", "tip_z [m]", "tip_qw", "tip_qx", "tip_qy", "tip_qz", "converged"]
+        columns += ["tip_x [m]", "tip_y [m]", "tip_z [m]", "tip_qw", "tip_qx", "tip_qy", "tip_qz"]
+        for name in (self.objects[0] if self.objects else {}):
+            columns += [f"{name}.held", f"{name}.x [m]", f"{name}.y [m]", f"{name}.z [m]"]
+        return columns + ["converged"]
 
     def rows(self):
         """``timeseries.csv`` rows: t, per TCA temperature, power (empty where not heated),
-        tension, stroke; the tip position and quaternion; converged."""
+        tension, stroke; the tip position and quaternion; each object's held flag and centre;
+        converged."""
         out = []
         for k, solution in enumerate(self.solutions):
             row = [f"{self.t[k]:.10g}"]
@@ -51,6 +57,8 @@ class TimeSeries:
                 row += [f"{self.temperatures[k, j]:.10g}", power, f"{actuator.tension:.10g}", f"{actuator.stroke:.10g}"]
             row += [f"{v:.10g}" for v in solution.tip_position]
             row += [f"{v:.10g}" for v in matrix_to_quaternion(solution.tip_rotation)]
+            for pose in (self.objects[k].values() if self.objects else ()):
+                row += [int(pose.held)] + [f"{v:.10g}" for v in pose.center]
             out.append(row + [int(solution.converged)])
         return out
 
@@ -78,40 +86,82 @@ def follow_temperatures(sim, keys, history, progress=None):
     return follow_parameters(sim, series, path, progress)
 
 
-def follow_parameters(sim, series, path, progress=None):
+#: in a time run, the outputs between branch checks: the quick steps between two checks are
+#: accepted once the check at the end of their stretch passes (see :func:`follow_parameters`)
+CHECK_EVERY = 10
+
+
+@dataclass
+class _Checked:
+    """The last output whose branch was checked: its index, solution, parameters and the
+    linearisation there (fresh)."""
+    index: int
+    solution: object
+    params: np.ndarray
+    linearisation: object
+
+
+def follow_parameters(sim, series, path, progress=None, careful=None):
     """Fill ``series`` (a :class:`TimeSeries`) with the equilibria at the parameter vectors
     ``path`` (one per output time): the first solved from the reference state, each next one
     by continuation from the previous. Stops at the first output time whose parameters leave
     the model's range (e.g. a TCA above its type's max_temperature) or whose equilibrium
     cannot be followed (``completed`` is then False, ``message`` says why; the solutions up
-    to there are kept). ``sim``'s parameters are left as they were."""
+    to there are kept). ``sim``'s parameters are left as they were.
+
+    ``careful`` (bool per output, default all) marks outputs that take a full continuation
+    step (:class:`BranchFollower`: a linearisation at the new point, the sign of det J_w and
+    the trapezoid test on the tangents, halving on failure). Elsewhere a *quick step* is tried
+    (:func:`quick_step`: the last checked point's tangent and LU, no linearisation), and every
+    :data:`CHECK_EVERY` outputs the stretch of quick steps is checked at once: a linearisation
+    at its end, the same sign of det J_w as at its start, and the trapezoid rule between its
+    two ends (``w`` is a function of the parameters on a branch, so the test holds over a
+    stretch as over one step). A stretch that fails is redone with full steps. A time run
+    marks every output where parameters may step (events) careful."""
     base = sim.params.copy()
-    solution = previous = linearisation = None
+    careful = np.ones(len(path), bool) if careful is None else np.array(careful, bool)
+    solution = previous = checked = None
+    k = 0
     try:
-        for k, params in enumerate(path):
+        while k < len(path):
+            params = path[k]
             problems = sim.robot.problems(params)
             if problems:
                 series.message = f"stopped at t = {series.t[k]:g} s: " + "; ".join(problems)
                 break
+            quick = None
+            if solution is not None and not careful[k] and checked is not None:
+                quick = quick_step(sim.solver("collocation"), checked.linearisation, solution, previous, params)
             if solution is None:
                 sim.params = params.copy()
                 solution = sim.solve(warn=False)
                 if not solution.converged:
                     series.message = f"no equilibrium at t = {series.t[0]:g} s: {solution.message}"
                     break
-            else:
-                follower = BranchFollower(sim.solver("collocation"), previous, params - previous)
-                start = follower.point(0.0, solution, linearisation=linearisation)   # the last one's, reused
-                point, _, _, failure = follower.advance(start, 1.0, 1.0, 1.0, 1e-4)
+            elif quick is None:
+                reuse = checked.linearisation if checked is not None and checked.index == k - 1 else None
+                point, failure = _full_step(sim, solution, previous, params, reuse)
                 if failure is not None:
                     series.message = (f"stopped at t = {series.t[k]:g} s: the equilibrium could not be "
                                       f"followed from t = {series.t[k - 1]:g} s ({failure.trial.message})")
                     break
-                solution, linearisation = point.solution, point.linearisation
+                solution = point.solution
+                checked = _Checked(k, solution, params, point.linearisation)
+            else:
+                solution = quick
+                if k - checked.index >= CHECK_EVERY or k == len(path) - 1:
+                    linearisation = sim.solver("collocation").linearise(solution.raw["w"], params)
+                    if not _stretch_holds(checked, solution, params, linearisation):
+                        del series.solutions[checked.index + 1:]          # redo it with full steps
+                        careful[checked.index + 1:k + 1] = True
+                        solution, previous, k = checked.solution, checked.params, checked.index + 1
+                        continue
+                    checked = _Checked(k, solution, params, linearisation)
             previous = params
             series.solutions.append(solution)
             if progress is not None:
                 progress((k + 1) / len(path), f"t = {series.t[k]:.3g} s")
+            k += 1
     finally:
         sim.params = base
         if solution is not None:
@@ -119,3 +169,47 @@ def follow_parameters(sim, series, path, progress=None):
     if series.completed:
         series.message = f"followed {len(series.t)} output times"
     return series
+
+
+def _full_step(sim, solution, previous, params, linearisation=None):
+    """One continuation step (halving on failure) from ``solution`` at ``previous`` to
+    ``params``; ``linearisation``: the one at ``solution``, if known. ``(point, failure)``."""
+    follower = BranchFollower(sim.solver("collocation"), previous, params - previous)
+    start = follower.point(0.0, solution, linearisation=linearisation)
+    point, _, _, failure = follower.advance(start, 1.0, 1.0, 1.0, 1e-4)
+    return point, failure
+
+
+def _stretch_holds(checked, solution, params, linearisation, jump_tolerance=0.15):
+    """Whether the quick steps from ``checked`` to ``solution`` (at ``params``, linearised
+    there) stayed on one branch: det J_w has the same sign at both ends and the change in
+    ``w`` meets the trapezoid rule on the two ends' tangents within ``jump_tolerance``
+    (relative, as :meth:`BranchFollower.inconsistency`)."""
+    try:
+        if linearisation.determinant_sign() * checked.linearisation.determinant_sign() <= 0:
+            return False
+        delta = np.asarray(params, float) - checked.params
+        change = solution.raw["w"] - checked.solution.raw["w"]
+        rates = checked.linearisation.state_derivative(delta) + linearisation.state_derivative(delta)
+    except RuntimeError:                    # singular: a fold at an end
+        return False
+    size = float(np.max(np.abs(change)))
+    return size == 0.0 or float(np.max(np.abs(change - 0.5 * rates))) <= jump_tolerance * size
+
+
+def quick_step(solver, linearisation, solution, previous, params, jump_tolerance=0.15):
+    """The equilibrium at ``params`` from ``solution`` (at ``previous``) without a new
+    linearisation: predicted along the tangent of ``linearisation`` (an earlier point's),
+    corrected by Newton starting with chord steps on its LU. None when Newton does not converge,
+    when its correction is more than ``jump_tolerance`` of the predicted change (it left the
+    predicted branch), or when an actuator goes slack or taut (a corner of the branch): the
+    caller then takes a full continuation step."""
+    w = solution.raw["w"]
+    predicted = w + linearisation.state_derivative(np.asarray(params, float) - previous)
+    trial = solver.solve_newton(params, predicted, lu=linearisation.lu)
+    if not trial.converged or _slack_pattern(trial) != _slack_pattern(solution):
+        return None
+    change = float(np.max(np.abs(predicted - w)))
+    correction = float(np.max(np.abs(trial.raw["w"] - predicted)))
+    floor = 1e-12 * max(1.0, float(np.max(np.abs(w))))
+    return trial if correction <= jump_tolerance * change + floor else None

@@ -16,7 +16,7 @@ from ..errors import ScenarioError
 from ..model.thermal import thermal_law
 from ..scenario.loader import validate
 from ..scenario.overrides import apply_overrides
-from ..solvers.thermal import Drive, Schedule, integrate
+from ..solvers.thermal import Drive, Schedule, integrate, steady_state
 from .heating import TimeSeries, follow_parameters
 
 #: drive kinds the thermal model heats (``temperature`` sets the temperature directly)
@@ -102,6 +102,29 @@ class TimeSimulation:
                 if highest > limit:
                     raise ScenarioError(f"{actuator.key}: setpoint {highest:g} degC is above tca_types."
                                         f"{actuator.tca_type}.max_temperature ({limit:g} degC)")
+        self.coupling = self._coupling()
+
+    def _coupling(self):
+        """The (heated, heated) conductances [W/K] of the modules' ``thermal_coupling`` (None
+        when there is none). A coupling needs both TCAs heated: a TCA whose temperature is set
+        has no heat balance to take the heat."""
+        keys = [a.key for a in self.heated]
+        matrix = np.zeros((len(keys), len(keys)))
+        for module in self.sim.scenario.modules:
+            coupling = module.thermal_coupling
+            if coupling is None:
+                continue
+            names = [a.name for a in module.actuators if a.kind == "tca"]
+            pairs = coupling.between or [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]
+            for pair in pairs:
+                for name in pair:
+                    if f"{module.name}.{name}" not in keys:
+                        raise ScenarioError(f"{module.name}.thermal_coupling: {module.name}.{name} has its temperature "
+                                            "set (no power, voltage, current or setpoint drive): give it a drive "
+                                            "(e.g. {kind: power, value: 0}) so it can exchange heat")
+                i, j = (keys.index(f"{module.name}.{name}") for name in pair)
+                matrix[i, j] = matrix[j, i] = coupling.conductance
+        return matrix if np.any(matrix) else None
 
     # ------------------------------------------------------------------ the timeline
     @staticmethod
@@ -180,8 +203,10 @@ class TimeSimulation:
         times = self.output_times()
         ambient = self.sim.scenario.ambient_temperature
         drives = self.drives()
-        initial = [d.initial_state(law, ambient) for law, d in zip(self.laws, drives)]   # before any event
-        history = integrate(self.laws, drives, ambient, initial, times) if self.heated else None
+        history = None
+        if self.heated:
+            initial = steady_state(self.laws, drives, ambient, self.coupling)      # before any event
+            history = integrate(self.laws, drives, ambient, initial, times, self.coupling)
         layout, tcas = self.sim.robot.layout, self.sim.robot.tcas
         powers = np.full((times.size, len(tcas)), np.nan)
         path = []
@@ -194,7 +219,42 @@ class TimeSimulation:
         temperatures = np.array([[p[layout[a.parameter]][0] for a in tcas] for p in path]).reshape(times.size, len(tcas))
         series = TimeSeries(times, [a.key for a in tcas], temperatures, powers)
         series.history = history
-        return follow_parameters(self.sim, series, path, progress)
+        follow_parameters(self.sim, series, path, progress, careful=self._careful(times))
+        self._track_objects(series)
+        return series
+
+    def _careful(self, times):
+        """Outputs that take a full continuation step: the first one at or after each event
+        (where its values may step) and the one after."""
+        careful = np.zeros(times.size, bool)
+        for event in self.sim.scenario.timeline:
+            k = int(np.searchsorted(times, event.at - 1e-12))
+            careful[k:k + 2] = True
+        return careful
+
+    def _track_objects(self, series):
+        """Each object's pose at every solved output (picked when its ``held`` is set: the
+        grasp checked as in ``sequence``; carried; put down). A grasp outside the object stops
+        the run there; one not across the object's long axis is a warning."""
+        from ..errors import PhysicsWarning
+        from .objects import ObjectTracker
+        from .sequence import GRIP_ANGLE_TOLERANCE
+        if not self.sim.scenario.objects:
+            return
+        tracker = ObjectTracker(self.sim.scenario, self.sim.robot)
+        for k, solution in enumerate(series.solutions):
+            picked = [n for n in tracker.names if tracker.held_in(solution, n) and not tracker.poses[n].held]
+            try:
+                series.objects.append(tracker.advance(solution, f"t = {series.t[k]:g} s"))
+            except ScenarioError as exc:
+                del series.solutions[k:]
+                series.message = f"stopped at t = {series.t[k]:g} s: {str(exc).split(': ', 1)[1]}"
+                return
+            for name in picked:
+                angle = tracker.grip_angle(solution, name)
+                if angle is not None and abs(angle - 90.0) > GRIP_ANGLE_TOLERANCE:
+                    series.warnings.append(PhysicsWarning("grasp", f"t = {series.t[k]:g} s: the gripper closes on "
+                                                          f"{name!r} at {angle:.1f} deg to its long axis, not across it"))
 
 
     # ------------------------------------------------------------------ reporting
@@ -212,6 +272,7 @@ class TimeSimulation:
                 i = self.heated.index(actuator)
                 balance = history.heat_balance_residual()[:reached, i]
                 entry.update(energy=float(history.energy_in[reached - 1, i]), time_constant=self.laws[i].time_constant,
+                             heat_to_neighbours=float(history.energy_exchanged[reached - 1, i]),
                              heat_balance_residual=float(np.max(np.abs(balance))))
             tcas[actuator.key] = entry
         responses = self._responses(series, reached)
@@ -222,7 +283,20 @@ class TimeSimulation:
                 "ambient_temperature": self.sim.scenario.ambient_temperature,
                 "events": [{"at": e.at, "set": {k: str(v) for k, v in e.set.items()}, "ramp": e.ramp}
                            for e in self.sim.scenario.timeline],
-                "tcas": tcas, "tip_responses": responses["tip"]}
+                "tcas": tcas, "tip_responses": responses["tip"], "objects": self._object_report(series),
+                "warnings": [str(w) for w in series.warnings]}
+
+    @staticmethod
+    def _object_report(series):
+        """Per object: when it was picked and put down [s] and where it ended [m]."""
+        out = {}
+        for name in (series.objects[0] if series.objects else {}):
+            held = [poses[name].held for poses in series.objects]
+            changes = [k for k in range(1, len(held)) if held[k] != held[k - 1]]
+            out[name] = {"picked_at": [float(series.t[k]) for k in changes if held[k]],
+                         "put_down_at": [float(series.t[k]) for k in changes if not held[k]],
+                         "final_center": series.objects[-1][name].center.tolist(), "held_at_end": held[-1]}
+        return out
 
     def _responses(self, series, reached):
         """Per event: the step response of each TCA's temperature and of the tip's distance
@@ -254,4 +328,10 @@ class TimeSimulation:
         if series.solutions:
             tip = series.solutions[-1].tip_position * 1e3
             lines.append("  tip at the end [mm]: " + " ".join(f"{v:+.4f}" for v in tip))
+        for name, entry in report["objects"].items():
+            picked = ", ".join(f"{t:g}" for t in entry["picked_at"]) or "never"
+            down = ", ".join(f"{t:g}" for t in entry["put_down_at"]) or "never"
+            centre = " ".join(f"{v * 1e3:+.2f}" for v in entry["final_center"])
+            lines.append(f"  {name}: picked at {picked} s, put down at {down} s; ends at [{centre}] mm")
+        lines += [f"  warning: {w}" for w in report["warnings"]]
         return "\n".join(lines)

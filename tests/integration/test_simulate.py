@@ -78,6 +78,11 @@ def test_a_ramped_event_is_linear_and_each_output_is_an_independent_solve():
     (["bending.tca2.drive={kind: setpoint, value: 160, gains: {proportional: 0.05, integral: 0.005}, max_power: 1}",
       "duration=10"], "setpoint 160 degC is above tca_types.nylon.max_temperature"),
     (["bending.tca2.drive={kind: setpoint, value: 60}"], "needs gains"),
+    (["bending.thermal_coupling={conductance: 2 mW/K, between: [[tca1, tca4]]}"], "not a TCA of module 'bending'"),
+    (["bending.thermal_coupling={conductance: 2 mW/K, between: [[tca1, tca1]]}"], "coupled to itself"),
+    (["bending.thermal_coupling={conductance: -2 mW/K}"], "greater than or equal to 0"),
+    (["bending.tca2.drive={kind: power, value: 1 W}", "bending.thermal_coupling={conductance: 2 mW/K}",
+      "duration=10"], "bending.tca1 has its temperature set"),
 ])
 def test_bad_timelines_are_one_line(tmp_path, capsys, settings, words):
     assert main(["simulate", BENDING, *_sets(settings), "-o", str(tmp_path), "--quiet"]) == 2
@@ -96,3 +101,64 @@ def test_a_setpoint_drive_holds_its_temperature_within_its_power():
     assert np.nanmax(series.powers[:, j]) <= 1.0 and series.powers[1, j] == 1.0   # saturated while far
     assert_allclose(series.temperatures[-1, j], 80.0, rtol=0, atol=1e-6)
     assert series.temperatures[:, j].max() <= 80.0 + 1e-6
+
+
+def test_coupled_tcas_of_a_module_share_heat_as_the_closed_form_says():
+    """The bending module's three TCAs coupled pairwise by Gc through the body, TCA 2 heated by
+    P from t = 1 s: the mean rise relaxes with G/C and the differences with (G + 3 Gc)/C, so
+    T2 - T_amb = (P/3G)(1 - e^(-tG/C)) + (2P/3(G + 3Gc))(1 - e^(-t(G + 3Gc)/C)) and TCAs 1 and 3
+    (symmetric) stay equal; each TCA's heat balance holds and the exchanges cancel."""
+    P, Gc = 0.4, 0.002
+    settings = [f"bending.tca{k}.drive={{kind: power, value: 0}}" for k in (1, 2, 3)] + [
+        f"bending.thermal_coupling={{conductance: {Gc} W/K}}", "duration=30",
+        f"timeline=[{{at: 1 s, set: {{bending.tca2.drive.value: {P} W}}}}]"]
+    sim = Simulation.from_file(BENDING, settings)
+    timed = TimeSimulation(sim, dt=1.0)
+    series = timed.run()
+    assert series.completed, series.message
+    C, G = timed.laws[0].heat_capacity, timed.laws[0].conductance
+    t = np.clip(series.t - 1.0, 0.0, None)
+    mean = P / (3 * G) * (1 - np.exp(-t * G / C))
+    spread = P / (G + 3 * Gc) * (1 - np.exp(-t * (G + 3 * Gc) / C))
+    T = series.temperatures
+    assert_allclose(T[:, 1], 25.0 + mean + 2 * spread / 3, rtol=0, atol=1e-6 * P / G)
+    assert_allclose(T[:, 0], 25.0 + mean - spread / 3, rtol=0, atol=1e-6 * P / G)
+    assert_allclose(T[:, 0], T[:, 2], rtol=0, atol=1e-9)
+    report = timed.report(series)
+    exchanged = [report["tcas"][f"bending.tca{k}"]["heat_to_neighbours"] for k in (1, 2, 3)]
+    assert exchanged[1] > 0.5 and exchanged[0] < 0                      # from the heated one to the others
+    assert_allclose(sum(exchanged), 0.0, rtol=0, atol=1e-9)
+    assert all(report["tcas"][k]["heat_balance_residual"] <= 1e-9 * P * 29 for k in report["tcas"])
+
+
+def test_the_animation_has_a_clock_at_a_stated_speed_up(tmp_path, capsys):
+    from PIL import Image
+
+    from tca_casadi.plotting.animation import animation_speed_up, frame_indices
+    assert [animation_speed_up(d, 10, 150) for d in (15.0, 15.1, 60.0, 130.0, 1e4)] == [1, 2, 5, 10, 1000]
+    t = np.array([0.0, 0.5, 1.0, 1.5, 2.0, 2.2])
+    assert frame_indices(t, fps=1, speed_up=1).tolist() == [0, 2, 4, 5]        # frames at 0, 1, 2 s, then the end
+    settings = CYCLE[:2] + ["duration=4", "timeline=[{at: 1 s, set: {bending.tca2.drive.value: 0.5 W}}]"]
+    assert main(["simulate", BENDING, *_sets(settings), "--dt", "0.5", "-o", str(tmp_path), "--quiet"]) == 0
+    assert "animation at real time" in capsys.readouterr().out
+    with Image.open(tmp_path / "simulate.gif") as gif:                         # 41 frames of 0.1 s (0 to 4 s),
+        durations = []                                                         # identical ones merged by the writer
+        for k in range(gif.n_frames):
+            gif.seek(k)
+            durations.append(gif.info["duration"])
+    assert gif.n_frames == 9 and sum(durations) == 4100                        # the 9 outputs: plays in real time
+    assert main(["simulate", BENDING, *_sets(settings), "--dt", "0.5", "-o", str(tmp_path), "--quiet",
+                 "--no-animation"]) == 0
+    assert not (tmp_path / "simulate.gif").exists()                            # a stale one is removed
+
+
+def test_holding_an_object_the_gripper_is_not_on_stops_the_run(tmp_path, capsys):
+    timed = str(SCENARIOS / "arm_pick_and_place_timed.yaml")
+    settings = ["duration=3", "timeline=[{at: 1 s, set: {bar.held: true}}]"]
+    assert main(["simulate", timed, *_sets(settings), "--dt", "1", "-o", str(tmp_path), "--quiet",
+                 "--no-animation"]) == 1
+    out = capsys.readouterr().out
+    assert "simulate STOPPED (stopped at t = 1 s: holds 'bar' but the grasp point is 9.59 mm from its centre" in out
+    rows = (tmp_path / "timeseries.csv").read_text().strip().splitlines()
+    assert len(rows) == 2 and rows[0].split(",")[-5:] == ["bar.held", "bar.x [m]", "bar.y [m]", "bar.z [m]",
+                                                          "converged"]

@@ -88,3 +88,61 @@ def test_step_response_of_a_first_order_lag():
     assert_allclose(response["settling_time"], tau * np.log(50.0), rtol=1e-6, atol=0)
     flat = step_response(t, np.full_like(t, 3.0), 1.0, t[-1])
     assert flat["rise_time"] is None and flat["settling_time"] is None
+
+
+def test_two_coupled_tcas_follow_their_two_modes():
+    """Identical TCAs coupled by Gc, only the first heated (P from t = 0): the sum of their
+    rises relaxes with G/C, their difference with (G + 2 Gc)/C; the heat each passes to the
+    other cancels in total and every TCA's own balance holds."""
+    from tca_casadi.solvers.thermal import steady_state
+    P, Gc, C, G = 0.3, 0.004, LAW.heat_capacity, LAW.conductance
+    outputs = np.linspace(0.0, 120.0, 241)
+    drives = [Drive("power", Schedule((0.0, 0.0), (0.0, P))), Drive("power", Schedule.constant(0.0))]
+    coupling = [[0.0, Gc], [Gc, 0.0]]
+    initial = steady_state([LAW, LAW], drives, AMBIENT, coupling)
+    assert_allclose(initial[:, 0], AMBIENT, rtol=0, atol=1e-12)        # the value before t = 0: no power
+    history = integrate([LAW, LAW], drives, AMBIENT, initial, outputs, coupling)
+    total = (P / G) * (1.0 - np.exp(-outputs * G / C))
+    difference = P / (G + 2 * Gc) * (1.0 - np.exp(-outputs * (G + 2 * Gc) / C))
+    expected = AMBIENT + 0.5 * np.stack([total + difference, total - difference], axis=1)
+    assert_allclose(history.temperature, expected, rtol=0, atol=1e-6 * P / G)
+    assert_allclose(history.energy_exchanged.sum(axis=1), 0.0, rtol=0, atol=1e-12)
+    assert history.energy_exchanged[-1, 0] > 0.1                       # heat did flow from the heated one
+    assert np.max(np.abs(history.heat_balance_residual())) <= 1e-6 * history.energy_in[-1, 0]
+
+
+@pytest.mark.parametrize("max_power", [1.0, 0.3])
+def test_coupled_steady_state_is_steady(max_power):
+    """A voltage-driven TCA with R(T) beside a PI setpoint at 70 degC: the steady state holds
+    for 60 s to 1e-8 degC; the setpoint is held while its power limit allows (1 W), else the
+    controller sits at its limit (0.3 W) below the setpoint."""
+    from tca_casadi.solvers.thermal import steady_state
+    warm = ThermalLaw(0.137, 0.00707, resistance=12.0, resistance_coefficient=4e-3)
+    drives = [Drive("voltage", Schedule.constant(2.0)),
+              Drive("setpoint", Schedule.constant(70.0), proportional=0.05, integral=0.005, max_power=max_power)]
+    coupling = [[0.0, 0.003], [0.003, 0.0]]
+    initial = steady_state([warm, LAW], drives, AMBIENT, coupling)
+    history = integrate([warm, LAW], drives, AMBIENT, initial, np.linspace(0.0, 60.0, 7), coupling)
+    assert_allclose(history.temperature, np.broadcast_to(initial[:, 0], (7, 2)), rtol=0, atol=1e-8)
+    needed = LAW.conductance * (70.0 - AMBIENT) + 0.003 * (70.0 - initial[0, 0])
+    if needed <= max_power:
+        assert_allclose(initial[1, 0], 70.0, rtol=0, atol=1e-12)
+    else:
+        assert initial[1, 0] < 70.0 - 1.0
+        assert_allclose(history.power[:, 1], max_power, rtol=0, atol=1e-12)
+
+
+def test_fixed_steps_converge_at_the_order_of_dop853():
+    """A voltage step with R(T) at t = 16 s (a breakpoint: the pieces are stepped separately):
+    halving the fixed step (16, 8, 4 s) divides the error at 80 s by about 2^8, the order of DOP853 (a
+    drive evaluated across its step would drop it to 1)."""
+    law = ThermalLaw(0.137, 0.00707, resistance=12.0, resistance_coefficient=4e-3)
+    drive = Drive("voltage", Schedule((0.0, 16.0, 16.0), (0.5, 0.5, 3.0)))
+    outputs = np.array([0.0, 80.0])
+    start = drive.initial_state(law, AMBIENT)
+    exact = integrate([law], [drive], AMBIENT, [start], outputs, rtol=1e-13, atol=1e-13).temperature[-1, 0]
+    errors = [abs(integrate([law], [drive], AMBIENT, [start], outputs, step=h).temperature[-1, 0] - exact)
+              for h in (16.0, 8.0, 4.0)]
+    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert errors[-1] > 1e-11                                          # still above the reference's error
+    assert np.all((orders > 7.5) & (orders < 9.0)), (errors, orders)

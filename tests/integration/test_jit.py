@@ -1,0 +1,40 @@
+"""``solver.jit: true``: the collocation residual compiled to machine code, kept on disk, giving
+the same answers as CasADi's virtual machine."""
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from conftest import SCENARIOS
+from tca_casadi import Simulation
+from tca_casadi.errors import TcaError
+
+BENDING = SCENARIOS / "bending_module.yaml"
+HEATED = ["bending.tca2.temperature=90"]
+
+
+def test_the_compiled_residual_gives_the_same_solution_and_is_kept(tmp_path, monkeypatch):
+    monkeypatch.setenv("TCA_CASADI_CACHE", str(tmp_path))
+    plain = Simulation.from_file(BENDING, HEATED).solve(warn=False)
+    sim = Simulation.from_file(BENDING, HEATED + ["solver.jit=true"])
+    fast = sim.solve(warn=False)
+    assert fast.converged
+    libraries = sorted((tmp_path / "jit").glob("nlp_g_*.so"))      # this NLP's, and the error estimate's
+    assert 1 <= len(libraries) <= 2
+    square = sim.solver("collocation").square
+    w = fast.raw["w"]
+    interpreted = np.array(square._residual_function(w, sim.params)).ravel()
+    assert_allclose(square.residual(w, sim.params), interpreted, rtol=0, atol=1e-14)
+    assert_allclose(fast.tip_position, plain.tip_position, rtol=0, atol=1e-12)
+    modified = [p.stat().st_mtime_ns for p in libraries]
+    from tca_casadi.solvers.collocation import clear_built_solvers
+    clear_built_solvers()
+    Simulation.from_file(BENDING, HEATED + ["solver.jit=true"]).solve(warn=False)
+    assert [p.stat().st_mtime_ns for p in sorted((tmp_path / "jit").glob("nlp_g_*.so"))] == modified   # reused
+
+
+def test_without_a_compiler_it_says_so(tmp_path, monkeypatch):
+    monkeypatch.setenv("TCA_CASADI_CACHE", str(tmp_path))
+    monkeypatch.setenv("PATH", str(tmp_path))
+    monkeypatch.delenv("CC", raising=False)
+    with pytest.raises(TcaError, match="needs a C compiler"):
+        Simulation.from_file(BENDING, HEATED + ["solver.jit=true"]).solve(warn=False)
