@@ -18,7 +18,8 @@ __version__ = "0.1.0"
 _LAZY = {"Simulation": ".simulation", "solve": ".simulation", "Solution": ".solution",
          "Sweep": ".studies", "SweepResult": ".studies", "InverseStatics": ".studies",
          "InverseResult": ".studies", "Target": ".studies", "Scenario": ".scenario",
-         "load_scenario": ".scenario", "Robot": ".model", "TcaLaw": ".model"}
+         "load_scenario": ".scenario", "Robot": ".model", "TcaLaw": ".model",
+         "TimeSimulation": ".studies.timeline", "simulate": ".studies.timeline"}
 
 __all__ = list(_LAZY) + ["ScenarioError", "SolverError", "ModelError", "OutputError", "TcaError",
                          "PhysicsWarning"]

@@ -335,3 +335,10 @@ class TimeSimulation:
             lines.append(f"  {name}: picked at {picked} s, put down at {down} s; ends at [{centre}] mm")
         lines += [f"  warning: {w}" for w in report["warnings"]]
         return "\n".join(lines)
+
+
+def simulate(sim, duration=None, dt=0.1, progress=None):
+    """Run ``sim``'s timeline (:class:`TimeSimulation`): the :class:`TimeSeries` of
+    ``duration`` [s] (default the scenario's) at output step ``dt`` [s]; ``progress(fraction,
+    text)`` is called after each output time."""
+    return TimeSimulation(sim, duration=duration, dt=dt).run(progress)
