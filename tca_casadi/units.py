@@ -40,6 +40,8 @@ KINDS = {
     "voltage": ("V", "a voltage"),
     "current": ("A", "a current"),
     "time": ("s", "a time"),
+    "viscosity": ("Pa*s", "a viscosity"),
+    "frequency": ("Hz", "a frequency"),
     "integral_gain": ("W/(K*s)", "an integral gain (W/(K s))"),
     "untwist_c2": ("", "an untwist coefficient in rad/(m degC^2) (a plain number)"),
     "untwist_c1": ("", "an untwist coefficient in rad/(m degC) (a plain number)"),

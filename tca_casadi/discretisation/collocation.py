@@ -51,6 +51,7 @@ class CollocationNLP:
         self._declare_variables()
         self.P = ca.MX.sym("P", self.parameter_size)
         self._g, self._lengths = [], [0] * len(robot.actuators)
+        self._viscous_ends = {}                # module -> viscous wrench at its tip (dynamics)
         self._partial_exprs = []
         self._ends, self._base_wrenches = [], []
         for m in range(len(robot.modules)):
@@ -142,15 +143,17 @@ class CollocationNLP:
         dX = X @ derivative
         Xc = X[:, colloc]
         active = self._active_mask(m, nodes[:, 0] + 0.5 * steps)[:, interval_of]   # (nA, npts)
-        rod = rod_equations(module.xi_star, len(module.actuators)).map(len(colloc))
+        viscous = self._viscous_nodes(m, X)                   # (6, nodes) or None (statics)
+        rod = rod_equations(module.xi_star, len(module.actuators), viscous is not None).map(len(colloc))
         stiffness = boundary.stiffness(module, self.param) @ ca.DM.ones(1, len(colloc))
         loads = self._distributed(m, nodes[:, 0] + 0.5 * steps, interval_of)
         inertial = self._inertial_loads(m, Xc, colloc)
         if inertial is not None:                              # body-frame force and moment
             loads[2], loads[3] = loads[2] + inertial[0], loads[3] + inertial[1]
+        extra = [] if viscous is None else [viscous[:, colloc], viscous @ derivative]
         kin, eq, speed = rod(Xc, dX[7:13, :],
                              self._route_data(m, s_colloc, active), self._tension_field(m, active), stiffness,
-                             *loads)
+                             *loads, *extra)
         fs, length = module.force_scale, module.length
         eq_scale = np.r_[np.ones(3), np.full(4, length), np.full(3, 1 / fs), np.full(3, length / fs)]
         self._g.append(ca.vec(ca.diag(ca.DM(eq_scale)) @ ca.vertcat(dX[0:7, :] - kin, eq)))
@@ -164,7 +167,12 @@ class CollocationNLP:
             self._lengths[position] = ca.sum2(self._partials[m][k, :])
         ends = X @ ca.DM(_end_matrix(scheme, n_int))           # (13, n_int)
         self._motion_constraints(m, Xc, colloc, derivative)
-        self._link_intervals(m, ends, X[:, ((np.arange(1, n_int)) * (d + 1)).tolist()])
+        starts = ((np.arange(1, n_int)) * (d + 1)).tolist()
+        if viscous is not None:                               # at interval ends, the next starts, the tip
+            viscous_ends = viscous @ ca.DM(_end_matrix(scheme, n_int))
+            self._viscous_ends[m] = viscous_ends[:, -1]
+            viscous = (viscous_ends[:, :-1], viscous[:, starts])
+        self._link_intervals(m, ends, X[:, starts], viscous)
         self._ends.append(ends[:, -1])
         self._module_end(m, ends[:, -1])
 
@@ -176,6 +184,15 @@ class CollocationNLP:
 
     def _motion_constraints(self, m, Xc, colloc, derivative):
         """The velocity states' equations of module m: none in statics."""
+
+    def _viscous_nodes(self, m, X):
+        """The viscous part of the internal wrench (Kelvin-Voigt ``B xi_t``) at every node of
+        module m (6, nodes), ``X`` its states: none in statics."""
+        return None
+
+    def _viscous_start(self, m):
+        """The viscous wrench at module m's base (6,), or None (statics)."""
+        return None
 
     def _route_data(self, m, s, active):
         """Route values ``[r; r'; r'']`` (9, nA npts) at the points ``s`` (zero where inactive),
@@ -227,12 +244,13 @@ class CollocationNLP:
 
     def _base_wrench(self, m, start):
         """Internal wrench just before the module's base, ``W(0-) = W(0+) + point wrenches``."""
-        return boundary.base_wrench(self.robot, m, start, self.tension_of, self.param)
+        return boundary.base_wrench(self.robot, m, start, self.tension_of, self.param, self._viscous_start(m))
 
     # ------------------------------------------------------------------ links
-    def _link_intervals(self, m, ends, starts):
+    def _link_intervals(self, m, ends, starts, viscous=None):
         """Continuity of p and h and the wrench jump ``K (xi+ - xi-) + point wrenches = 0`` at
-        every interior breakpoint of module m (ends: (13, n_int), starts: (13, n_int - 1))."""
+        every interior breakpoint of module m (ends: (13, n_int), starts: (13, n_int - 1));
+        ``viscous``: ``(before, after)`` (6, n_int - 1) viscous wrenches, whose jump adds in."""
         mesh = self.meshes[m]
         if starts.shape[1] == 0:
             return
@@ -247,6 +265,8 @@ class CollocationNLP:
             wrench = self._point_wrenches(m, s, before[:, b], starts[:, b])
             columns.append(wrench if wrench is not None else ca.DM.zeros(6))
         jump = jump + ca.horzcat(*columns)
+        if viscous is not None:
+            jump = jump + viscous[1] - viscous[0]
         self._g.append(ca.vec(ca.diag(self._wrench_scale(m)) @ jump))
 
     def _module_end(self, m, end):
@@ -258,7 +278,8 @@ class CollocationNLP:
             position, quaternion = boundary.junction_pose(end, self.robot.modules[c])
             self._g.append((start[P_] - position) / module.length)
             self._g.append(start[H_] - quaternion)
-        balance = boundary.tip_balance(self.robot, m, end, starts, self.tension_of, self.param)
+        viscous = {c: self._viscous_start(c) for c in starts} | {m: self._viscous_ends.get(m)}
+        balance = boundary.tip_balance(self.robot, m, end, starts, self.tension_of, self.param, viscous)
         self._g.append(balance * self._wrench_scale(m))
 
     # ------------------------------------------------------------------ TCA law

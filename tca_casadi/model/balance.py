@@ -125,13 +125,13 @@ def _distributed_load(load, result, value):
 
 
 def load_markers(robot, modules, params):
-    """Point loads and masses for drawings: ``[{name, kind, position (3,), force (3,)}]``
+    """Point loads and masses for drawings: ``[{name, kind, position (3,), force (3,), moment (3,)}]``
     (global frame, SI), held objects' shares included."""
     value = _values(robot, params)
     out = []
     for load in robot.point_loads:
-        point, force, _ = _point_load(load, modules[load.module], value)
-        out.append({"name": load.name, "kind": load.kind, "position": point, "force": force})
+        point, force, moment = _point_load(load, modules[load.module], value)
+        out.append({"name": load.name, "kind": load.kind, "position": point, "force": force, "moment": moment})
     return out
 
 

@@ -154,21 +154,25 @@ def child_wrench(end, child, base_wrench, param):
     return total
 
 
-def base_wrench(robot, m, start, tension, param):
+def base_wrench(robot, m, start, tension, param, viscous=None):
     """``W(0-)`` of module m: the internal wrench at its start plus the point wrenches there
-    (what its base support, or its parent's tip, carries)."""
-    return add(internal_wrench(robot.modules[m], start, param), point_wrenches(robot, m, 0.0, None, start, tension, param))
+    (what its base support, or its parent's tip, carries). ``viscous``: the viscous part of the
+    internal wrench at the start (dynamics), (6,), or None."""
+    internal = add(internal_wrench(robot.modules[m], start, param), viscous)
+    return add(internal, point_wrenches(robot, m, 0.0, None, start, tension, param))
 
 
-def tip_balance(robot, m, end, starts, tension, param):
+def tip_balance(robot, m, end, starts, tension, param, viscous=None):
     """``W(L) - point wrenches at L - sum of what the children in ``starts`` ({child: start
     state}) put on the tip`` (parent tip frame, SPEC section 5): zero at equilibrium when every
-    child is included; with some left out, what those must carry."""
-    module = robot.modules[m]
+    child is included; with some left out, what those must carry. ``viscous``: the viscous
+    parts of the internal wrenches (dynamics), ``{m: at the tip, c: at child c's base}``."""
+    module, viscous = robot.modules[m], viscous or {}
     applied = point_wrenches(robot, m, module.length, end, None, tension, param)
-    balance = internal_wrench(module, end, param) - add(ca.DM.zeros(6), applied)
+    balance = add(internal_wrench(module, end, param), viscous.get(m)) - add(ca.DM.zeros(6), applied)
     for c, start in starts.items():
-        balance = balance - child_wrench(end, robot.modules[c], base_wrench(robot, c, start, tension, param), param)
+        base = base_wrench(robot, c, start, tension, param, viscous.get(c))
+        balance = balance - child_wrench(end, robot.modules[c], base, param)
     return balance
 
 

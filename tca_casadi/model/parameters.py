@@ -36,7 +36,7 @@ import numpy as np
 
 #: keys of the scenario that are neither parameters nor structure (they never change a solve)
 IGNORED = (("name",), ("description",), ("inverse",), ("sequence",), ("ambient_temperature",),
-           ("duration",), ("timeline",))
+           ("duration",), ("timeline",), ("dynamics",))
 #: keys of each TCA type that the statics never read (the thermal model's)
 TCA_THERMAL = ("thermal", "resistance", "resistance_temperature_coefficient")
 #: keys of each grasped object that only drawings use

@@ -23,8 +23,9 @@ def path_tangent(u, v, du, dv, r, dr, ddr):
     return t, speed, q
 
 
-def rod_equations(xi_star, n_actuators):
-    """Function ``(x, dxi, routes, F, K, f_glob, l_glob, f_body, l_body) -> (kin, eq, speed)``.
+def rod_equations(xi_star, n_actuators, viscous=False):
+    """Function ``(x, dxi, routes, F, K, f_glob, l_glob, f_body, l_body) -> (kin, eq, speed)``
+    (``viscous``: two more inputs, ``W_v`` and ``dW_v``, below).
 
     ``x`` is the deviation state (module docstring). ``kin`` (7): ``[p', h']``; ``eq`` (6): the residual of equilibrium in the body frame,
     ``[m' + u x m + v x n + l ; n' + u x n + f]`` [N, N/m], which is linear in ``dxi``;
@@ -33,6 +34,8 @@ def rod_equations(xi_star, n_actuators):
     it follows the material's moduli); ``f_glob``/``l_glob`` are distributed loads per unit length
     in the global frame (self-weight included), ``f_body``/``l_body`` in the body frame.
     ``xi_star`` are the reference strains (6,), constant along the module (structure).
+    ``viscous``: the internal wrench is ``K (xi - xi*) + W_v`` with a viscous part ``W_v`` (6,)
+    (Kelvin-Voigt: ``B xi_t``) whose derivative along s is the input ``dW_v`` (6,).
     """
     x = ca.SX.sym("x", STATE_SIZE)
     dxi = ca.SX.sym("dxi", 6)
@@ -44,8 +47,9 @@ def rod_equations(xi_star, n_actuators):
     u, v = x[7:10] + ca.DM(xi_star[0:3]), x[10:13] + ca.DM(xi_star[3:6])
     du, dv = dxi[0:3], dxi[3:6]
     R = rotation_matrix(h)
-    m = k[0:3] * x[7:10]
-    n = k[3:6] * x[10:13]
+    extra = [ca.SX.sym("W_v", 6), ca.SX.sym("dW_v", 6)] if viscous else [ca.SX.zeros(6), ca.SX.zeros(6)]
+    m = k[0:3] * x[7:10] + extra[0][0:3]
+    n = k[3:6] * x[10:13] + extra[0][3:6]
     f = R.T @ loads[0] + loads[2]
     l = R.T @ loads[1] + loads[3]
     speeds = []
@@ -55,14 +59,13 @@ def rod_equations(xi_star, n_actuators):
         f += tension[i] * q
         l += ca.cross(r, tension[i] * q)
         speeds.append(speed)
-    eq_m = k[0:3] * du + ca.cross(u, m) + ca.cross(v, n) + l
-    eq_n = k[3:6] * dv + ca.cross(u, n) + f
+    eq_m = k[0:3] * du + extra[1][0:3] + ca.cross(u, m) + ca.cross(v, n) + l
+    eq_n = k[3:6] * dv + extra[1][3:6] + ca.cross(u, n) + f
     kin = ca.vertcat(R @ v, 0.5 * omega(u) @ h)
     speed = ca.vertcat(*speeds) if speeds else ca.SX(0, 1)
-    return ca.Function("rod_equations", [x, dxi, routes, tension, k] + loads,
-                       [kin, ca.vertcat(eq_m, eq_n), speed],
-                       ["x", "dxi", "routes", "F", "K", "f_glob", "l_glob", "f_body", "l_body"],
-                       ["kin", "eq", "speed"])
+    names = ["x", "dxi", "routes", "F", "K", "f_glob", "l_glob", "f_body", "l_body"] + (["W_v", "dW_v"] if viscous else [])
+    return ca.Function("rod_equations", [x, dxi, routes, tension, k] + loads + (extra if viscous else []),
+                       [kin, ca.vertcat(eq_m, eq_n), speed], names, ["kin", "eq", "speed"])
 
 
 def explicit_strain_rate(equations):

@@ -502,6 +502,34 @@ class TimelineEvent(Strict):
     ramp: Optional[Annotated[float, _quantity("time"), Field(gt=0)]] = None
 
 
+class Damping(Strict):
+    """Kelvin-Voigt damping of the rods (:class:`tca_casadi.model.dynamics.KelvinVoigt`): an
+    extensional ``viscosity`` [Pa s] (and ``shear_viscosity``, default a third of it), or a
+    damping ``ratio`` at a ``frequency`` [Hz] (stiffness proportional)."""
+    viscosity: Optional[Annotated[float, _quantity("viscosity"), Field(ge=0)]] = None
+    shear_viscosity: Optional[Annotated[float, _quantity("viscosity"), Field(ge=0)]] = None
+    ratio: Optional[Annotated[float, Field(ge=0, le=10)]] = None
+    frequency: Optional[Annotated[float, _quantity("frequency"), Field(gt=0)]] = None
+
+    @model_validator(mode="after")
+    def _one_way(self):
+        if (self.viscosity is None) == (self.ratio is None):
+            raise ValueError("give either viscosity (and shear_viscosity) or ratio and frequency")
+        if self.ratio is not None and self.frequency is None:
+            raise ValueError("a damping ratio needs the frequency it holds at (frequency: Hz)")
+        if self.ratio is not None and self.shear_viscosity is not None:
+            raise ValueError("shear_viscosity goes with viscosity, not with ratio")
+        return self
+
+
+class Dynamics(Strict):
+    """``simulate`` with the rods' inertia (issue 16): ``enabled``, the ``integrator``
+    (``bdf2`` or ``midpoint``) and optional ``damping``."""
+    enabled: bool = False
+    integrator: Literal["bdf2", "midpoint"] = "bdf2"
+    damping: Optional[Damping] = None
+
+
 class Scenario(Strict):
     """A whole robot: modules in series from a base, loads, gravity and solver options."""
     name: str = "scenario"
@@ -521,5 +549,6 @@ class Scenario(Strict):
     #: ``simulate``: how long [s], and the events on the way
     duration: Optional[Annotated[float, _quantity("time"), Field(gt=0)]] = None
     timeline: list[TimelineEvent] = Field(default_factory=list)
+    dynamics: Dynamics = Field(default_factory=Dynamics)
     _raw: Optional[dict] = PrivateAttr(default=None)
     _sources: object = PrivateAttr(default=None)

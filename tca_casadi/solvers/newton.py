@@ -53,6 +53,7 @@ class SquareSystem:
         self._jacobian_pattern = CscPattern(jacobian.sparsity_out(1))
         self.shape = self._jacobian_pattern.shape
         self._sensitivity = None
+        self.last_lu = None
 
     def evaluate(self, w, P):
         """``(g, J_w)``: copies of the residual (n,) and the Jacobian (CSC)."""
@@ -75,6 +76,7 @@ class SquareSystem:
         g = self.residual(w, P)
 
         def ended(iteration, failure=None):
+            self.last_lu = lu                      # the factors last used (a time stepper's next chord start)
             residual = float(np.max(np.abs(g))) if g.size else 0.0
             return w, SolveStatus.judged("Newton", residual, tolerance, failure, nit=iteration,
                                          solve_time_s=time.perf_counter() - started)

@@ -26,6 +26,8 @@ class TimeSeries:
     message: str = ""
     objects: list = field(default_factory=list)      # per solved output: {name: ObjectPose} (scenario objects)
     warnings: list = field(default_factory=list)     # PhysicsWarning s (e.g. a grasp not across the object)
+    tip_velocities: np.ndarray = None                # a dynamic run's: (n, 3) [m/s]
+    energies: np.ndarray = None                      # a dynamic run's: (n, 7) [J], motion.ENERGY_COLUMNS
 
     @property
     def completed(self):
@@ -40,6 +42,9 @@ class TimeSeries:
         for key in self.keys:
             columns += [f"{key}.temperature [degC]", f"{key}.power [W]", f"{key}.tension [N]", f"{key}.stroke [m]"]
         columns += ["tip_x [m]", "tip_y [m]", "tip_z [m]", "tip_qw", "tip_qx", "tip_qy", "tip_qz"]
+        if getattr(self, "energies", None) is not None:          # a dynamic run
+            from .motion import ENERGY_COLUMNS
+            columns += ["tip_vx [m/s]", "tip_vy [m/s]", "tip_vz [m/s]"] + [f"{name} [J]" for name in ENERGY_COLUMNS]
         for name in (self.objects[0] if self.objects else {}):
             columns += [f"{name}.held", f"{name}.x [m]", f"{name}.y [m]", f"{name}.z [m]"]
         return columns + ["converged"]
@@ -57,6 +62,8 @@ class TimeSeries:
                 row += [f"{self.temperatures[k, j]:.10g}", power, f"{actuator.tension:.10g}", f"{actuator.stroke:.10g}"]
             row += [f"{v:.10g}" for v in solution.tip_position]
             row += [f"{v:.10g}" for v in matrix_to_quaternion(solution.tip_rotation)]
+            if getattr(self, "energies", None) is not None:
+                row += [f"{v:.10g}" for v in self.tip_velocities[k]] + [f"{v:.10g}" for v in self.energies[k]]
             for pose in (self.objects[k].values() if self.objects else ()):
                 row += [int(pose.held)] + [f"{v:.10g}" for v in pose.center]
             out.append(row + [int(solution.converged)])

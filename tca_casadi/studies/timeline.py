@@ -88,6 +88,9 @@ class TimeSimulation:
             raise ScenarioError(f"the timeline's last event ({max(e.at for e in events):g} s) is after the "
                                 f"duration ({self.duration:g} s)")
         self.dt = float(dt)
+        if scenario.dynamics.enabled:
+            from .motion import check_dynamics
+            check_dynamics(sim, self.dt)
         self._parameter_schedule = None
         self.states = self._states_after_events()
         self.heated = [a for a in sim.robot.tcas if self._drive(scenario, a).kind in HEATED]
@@ -166,8 +169,9 @@ class TimeSimulation:
         """``0, dt, 2 dt, ...`` up to the duration, with every event time and ramp end."""
         grid = np.arange(0.0, self.duration + 0.5 * self.dt, self.dt)
         marks = [t for e in self.sim.scenario.timeline for t in (e.at, e.at + (e.ramp or 0.0))]
-        times = np.union1d(np.round(grid, 12), [t for t in marks if t <= self.duration])
-        return times[times <= self.duration + 1e-12]
+        times = np.union1d(np.round(grid, 12), np.round([t for t in marks if t <= self.duration], 12))
+        times = times[times <= self.duration + 1e-12]
+        return times[np.r_[True, np.diff(times) > 1e-9]]         # a mark within 1 ns of a grid time is that time
 
     def _knots(self):
         """Knot times and the state index on each side: values are linear between knots."""
@@ -176,12 +180,13 @@ class TimeSimulation:
             knots += [(event.at, k - 1), (event.at + (event.ramp or 0.0), k)]
         return knots
 
-    def parameters_at(self, t):
-        """The parameter vector the timeline gives at ``t`` [s] (heated TCAs' temperatures aside)."""
+    def parameters_at(self, t, left=False):
+        """The parameter vector the timeline gives at ``t`` [s] (heated TCAs' temperatures aside;
+        ``left``: before an event at ``t``)."""
         if self._parameter_schedule is None:
             knots = self._knots()
             self._parameter_schedule = Schedule(tuple(t for t, _ in knots), tuple(self.states[k][1] for _, k in knots))
-        return self._parameter_schedule(t)
+        return self._parameter_schedule(t, left)
 
     def drives(self):
         """One :class:`Drive` per heated TCA: its value's schedule from the timeline."""
@@ -219,7 +224,15 @@ class TimeSimulation:
         temperatures = np.array([[p[layout[a.parameter]][0] for a in tcas] for p in path]).reshape(times.size, len(tcas))
         series = TimeSeries(times, [a.key for a in tcas], temperatures, powers)
         series.history = history
-        follow_parameters(self.sim, series, path, progress, careful=self._careful(times))
+        if self.sim.scenario.dynamics.enabled:
+            from .motion import follow_dynamics
+            initial = path[0].copy()                    # at rest before any event at t = 0
+            initial[:] = self.parameters_at(times[0], left=True)
+            for j, actuator in enumerate(self.heated):
+                initial[layout[actuator.parameter]] = history.temperature[0, j]
+            follow_dynamics(self.sim, series, path, progress, initial)
+        else:
+            follow_parameters(self.sim, series, path, progress, careful=self._careful(times))
         self._track_objects(series)
         return series
 
@@ -284,7 +297,25 @@ class TimeSimulation:
                 "events": [{"at": e.at, "set": {k: str(v) for k, v in e.set.items()}, "ramp": e.ramp}
                            for e in self.sim.scenario.timeline],
                 "tcas": tcas, "tip_responses": responses["tip"], "objects": self._object_report(series),
+                "dynamics": self._dynamics_report(series),
                 "warnings": [str(w) for w in series.warnings]}
+
+    def _dynamics_report(self, series):
+        """The integrator, the peak tip speed [m/s] and the energy balance's worst residual [J]
+        (and relative to the largest stored energy), or None for a quasi-static run."""
+        config = self.sim.scenario.dynamics
+        if not config.enabled or getattr(series, "energies", None) is None or not len(series.energies):
+            return None
+        from .motion import ENERGY_COLUMNS
+        energies = series.energies
+        # the energy in play: stored (kinetic and elastic; the change of gravitational) and moved (work)
+        stored = float(np.max(energies[:, 0] + energies[:, 1]) + np.max(np.abs(energies[:, 2] - energies[0, 2]))
+                       + np.max(np.abs(energies[:, 3:6])))
+        worst = float(np.max(np.abs(energies[:, ENERGY_COLUMNS.index("energy_balance")])))
+        return {"integrator": config.integrator, "damping": None if config.damping is None else
+                config.damping.model_dump(), "peak_tip_speed": float(np.max(np.linalg.norm(series.tip_velocities, axis=1))),
+                "energy_balance_residual": worst, "energy_balance_relative": worst / stored if stored > 0 else 0.0,
+                "final": {name: float(energies[-1, k]) for k, name in enumerate(ENERGY_COLUMNS)}}
 
     @staticmethod
     def _object_report(series):

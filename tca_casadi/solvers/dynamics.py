@@ -1,0 +1,202 @@
+"""Implicit time stepping of the rod dynamics (issue 16): every step is one warm Newton solve of
+the boundary-value problem in s on one built NLP (:mod:`tca_casadi.discretisation.dynamics`).
+
+The NLP's time derivatives are ``x_t = c0 x + x_hist`` for the strain deviations and the
+velocities ``x = [xi - xi*, q, w]`` at every node; an integrator is a choice of ``c0`` and of
+the history from the previous steps' node values (step ``h``):
+
+* ``bdf1`` (implicit Euler, order 1, used for the first step of ``bdf2``):
+  ``c0 = 1/h``, ``x_hist = -x_n / h``;
+* ``bdf2`` (order 2, L-stable: damps what the step cannot resolve):
+  ``c0 = 3/(2h)``, ``x_hist = (-4 x_n + x_{n-1}) / (2h)``;
+* ``midpoint`` (implicit midpoint, order 2, symplectic: no numerical damping; for checking):
+  the unknown is the midpoint state ``z = x_{n+1/2}``, solved at the parameters of
+  ``t_n + h/2`` with ``c0 = 2/h``, ``x_hist = -2 x_n / h`` (so ``x_t = (x_{n+1} - x_n)/h``),
+  and ``x_{n+1} = 2 z - x_n``.
+
+The positions and orientations are not time-stepped: they follow, along s, from the base and
+the strains at each instant, as in the statics; the velocity compatibility makes ``p_t = R q``.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..discretisation.dynamics import DynamicCollocationNLP
+from ..errors import ScenarioError
+from ..model.dynamics import elastic_energy_density, inertia_per_length, kinetic_energy_density
+from ..model.rotations import rotation_numpy, rotations_of
+from .collocation import CollocationSolver
+
+INTEGRATORS = ("bdf2", "midpoint", "bdf1")
+
+
+class DynamicSolver(CollocationSolver):
+    """The collocation solver of one implicit time step (:class:`DynamicCollocationNLP`); its
+    parameter vector is ``[robot parameters; c0; history]``. Solutions' global balance includes
+    the sections' inertial loads."""
+    method = "collocation-dynamics"
+    nlp_class = DynamicCollocationNLP
+    estimates_error = False
+
+    def node_values(self, w):
+        """Per module ``(deviation strains (6, nodes), velocities (6, nodes))`` [SI] at every
+        node (interval starts and collocation points, interval by interval) of scaled ``w``."""
+        physical = np.asarray(w, float) * self.nlp.scale
+        out = []
+        for m in range(len(self.robot.modules)):
+            states = physical[self.nlp.state_index[m].transpose(1, 0, 2).reshape(13, -1)]
+            velocities = physical[self.nlp.velocity_index[m].transpose(1, 0, 2).reshape(6, -1)]
+            out.append((states[7:13], velocities))
+        return out
+
+    def parameters(self, params, c0, damping, histories):
+        """``[params; c0; B per module; history]`` from per-module damping diagonals (6,) and
+        histories ((12, nodes) each)."""
+        return np.concatenate([np.asarray(params, float), [c0]] + [np.asarray(b, float) for b in damping]
+                              + [h.T.ravel() for h in histories])
+
+    def _extra_loads(self, w, params, module_data):
+        """The sections' inertial forces and moments at the nodes (global frame, times the
+        quadrature weights), for the global balance."""
+        nlp, robot_params = self.nlp, params[:self.robot.layout.size]
+        c0 = params[nlp.c0_index]
+        param = self.robot.param_function(robot_params)
+        points, forces, moments = [], [], []
+        for m, (deviation, velocity) in enumerate(self.node_values(w)):
+            s, states, _, weights = module_data[m]
+            history = params[nlp.history_index[m]].T                     # (12, nodes)
+            rates = c0 * velocity + history[6:12]
+            mass, rotary = inertia_per_length(self.robot.modules[m], param)
+            q, w_, q_t, w_t = velocity[0:3], velocity[3:6], rates[0:3], rates[3:6]
+            force = -mass * (q_t + np.cross(w_, q, axis=0))
+            moment = -(rotary[:, None] * w_t + np.cross(w_, rotary[:, None] * w_, axis=0))
+            R = rotations_of(states[3:7, :-1])                                # nodes without the tip
+            weight = weights[:-1]
+            points.append(states[0:3, :-1])
+            forces.append(np.einsum("ijk,jk->ik", R, force) * weight)
+            moments.append(np.einsum("ijk,jk->ik", R, moment) * weight)
+        return np.hstack(points), np.hstack(forces), np.hstack(moments)
+
+
+@dataclass
+class StepState:
+    """Node values at one instant: per module (deviation strains (6, n), velocities (6, n))
+    and the scaled NLP variables ``w``."""
+    t: float
+    nodes: list
+    w: np.ndarray
+    params: np.ndarray
+
+
+class RodDynamics:
+    """Time stepping of ``sim``'s robot from its static equilibrium at rest.
+
+    Parameters
+    ----------
+    sim : Simulation
+        Its robot, solver options and mesh (the static solver's, after any refinement).
+    integrator : str
+        One of :data:`INTEGRATORS`.
+    damping : KelvinVoigt, optional
+        The rods' viscosity (default none).
+    """
+
+    def __init__(self, sim, integrator="bdf2", damping=None):
+        if integrator not in INTEGRATORS:
+            raise ScenarioError(f"dynamics.integrator: {integrator!r} is not one of {', '.join(INTEGRATORS)}")
+        self.sim, self.integrator = sim, integrator
+        static = sim.solver("collocation")
+        self.solver = DynamicSolver(sim.robot, static.options, meshes=static.nlp.meshes, degree=static.degree)
+        self.damping = [np.zeros(6) if damping is None else damping.matrix(module)
+                        for module in sim.robot.modules]
+        self.states = []                     # StepState s, the last two kept
+        self._lu = None
+
+    def start(self, solution, t=0.0):
+        """Begin at rest in the static ``solution`` (its collocation variables) at time ``t``."""
+        static_w = solution.raw["w"]
+        w = np.concatenate([static_w, np.zeros(self.solver.nlp.scale.size - static_w.size)])
+        self.states = [StepState(t, self.solver.node_values(w), w, np.array(solution.parameters, float))]
+        return self.states[-1]
+
+    def _coefficients(self, h):
+        """``(c0, history per module)`` for the next step of size ``h``. BDF2 with variable
+        steps (ratio ``r = h / h_prev``): ``x_t = [(1 + 2r)/(1 + r) x_{n+1} - (1 + r) x_n
+        + r^2/(1 + r) x_{n-1}] / h``."""
+        now = self.states[-1]
+        kind = self.integrator if not (self.integrator == "bdf2" and len(self.states) < 2) else "bdf1"
+        ratio = h / (now.t - self.states[-2].t) if kind == "bdf2" else 1.0
+        histories = []
+        for m, (deviation, velocity) in enumerate(now.nodes):
+            x_n = np.vstack([deviation, velocity])
+            if kind == "bdf1":
+                histories.append(-x_n / h)
+            elif kind == "bdf2":
+                before = np.vstack(self.states[-2].nodes[m])
+                histories.append((-(1.0 + ratio) * x_n + ratio ** 2 / (1.0 + ratio) * before) / h)
+            else:
+                histories.append(-2.0 * x_n / h)
+        c0 = {"bdf1": 1.0 / h, "bdf2": (1.0 + 2.0 * ratio) / ((1.0 + ratio) * h), "midpoint": 2.0 / h}[kind]
+        return c0, histories
+
+    def step(self, params, h):
+        """Advance by ``h`` [s] to the robot parameters ``params`` (at the end of the step; the
+        midpoint rule solves at the mean of the previous step's and these). Returns ``(state,
+        solution)``: the node values at the end of the step and the solved point (the end, or
+        the midpoint for ``midpoint``), or ``(None, solution)`` if Newton did not converge."""
+        now = self.states[-1]
+        c0, histories = self._coefficients(h)
+        params = np.asarray(params, float)
+        solved_at = 0.5 * (params + now.params) if self.integrator == "midpoint" else params
+        full = self.solver.parameters(solved_at, c0, self.damping, histories)
+        guess = now.w
+        if len(self.states) == 2:                    # extrapolated from the last two states
+            last = now.t - self.states[-2].t
+            reach = (0.5 * h if self.integrator == "midpoint" else h) / last
+            guess = now.w + (now.w - self.states[-2].w) * reach
+        solution = self.solver.solve_newton(full, guess, lu=self._lu)
+        self._lu = self.solver.square.last_lu           # chord steps of the next step start on it
+        self.last_status = solution.result
+        if not solution.converged:
+            return None, solution
+        w = solution.raw["w"]
+        if self.integrator == "midpoint":
+            w = 2.0 * w - now.w
+        state = StepState(now.t + h, self.solver.node_values(w), w, params)
+        self.states = (self.states + [state])[-2:]
+        return state, solution
+
+    def tip_velocity(self, state):
+        """The tip's global velocity [m/s] (3,) at ``state``: ``R q`` at the tip module's end."""
+        nlp, tip = self.solver.nlp, self.sim.robot.tip_index
+        _, ends, _ = self.solver._outputs_at(state.w, np.zeros(nlp.parameter_size))
+        last = state.nodes[tip][1][:, -(self.solver.degree + 1):]            # the last interval's nodes
+        q_end = last @ nlp.scheme.D
+        return rotation_numpy(ends[3:7, tip]) @ q_end[0:3]
+
+    def end_solution(self, state, previous):
+        """The :class:`Solution` of the end state of a midpoint step (extrapolated), with the
+        accelerations ``(y_{n+1} - y_n) / h`` in its global balance and the step's status."""
+        h = state.t - previous.t
+        histories = [-np.vstack(nodes) / h for nodes in previous.nodes]
+        full = self.solver.parameters(state.params, 1.0 / h, self.damping, histories)
+        return self.solver.evaluate(state.w, full, self.last_status)
+
+    def tip_position(self, state):
+        """The tip [m] (3,) at ``state`` (the end of the tip module, from the node values)."""
+        nlp = self.solver.nlp
+        _, ends, _ = self.solver._outputs_at(state.w, np.zeros(nlp.parameter_size))
+        return ends[0:3, self.sim.robot.tip_index]
+
+    def energies(self, state, params):
+        """``(kinetic, elastic)`` [J] of the rod at ``state`` (Gauss quadrature on the nodes)."""
+        param = self.sim.robot.param_function(params)
+        kinetic = elastic = 0.0
+        for m, (deviation, velocity) in enumerate(state.nodes):
+            module = self.sim.robot.at(params).modules[m]
+            weights = self.solver.nlp.node_weights(m)[:-1]
+            mass, rotary = inertia_per_length(self.sim.robot.modules[m], param)
+            kinetic += float(kinetic_energy_density(velocity[0:3], velocity[3:6], mass, rotary) @ weights)
+            elastic += float(elastic_energy_density(module.stiffness, deviation) @ weights)
+        return kinetic, elastic
+

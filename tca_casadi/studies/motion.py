@@ -1,0 +1,201 @@
+"""``simulate`` with the rods' inertia (``dynamics: {enabled: true}``, issue 16): one implicit
+time step per output time (:class:`~tca_casadi.solvers.dynamics.RodDynamics`) from the static
+equilibrium at t = 0, the TCAs' temperatures and every other parameter from the timeline as in
+the quasi-static run, and the energy account of the motion.
+
+Energies at each output time [J]: kinetic ``int (rho A |q|^2 + w . rho J w) / 2 ds``, elastic
+``int (xi - xi*) . K (xi - xi*) / 2 ds``, gravitational ``-int rho A g . p ds``; and from t = 0:
+the work the actuators do on the body, ``-sum_i int F_i dl_i`` (a TCA that shortens while it
+pulls does positive work), the work of the point loads ``int F . dp + M . dtheta``, and the
+energy the rods' viscosity dissipated, ``int int xi_t . B xi_t ds dt`` (all in time by the
+trapezoidal rule, ``xi_t`` as ``(xi_{n+1} - xi_n) / h``). Their balance
+
+    (kinetic + elastic + gravitational)(t) - (...)(0) + dissipated - actuator work - load work
+
+is zero up to the time discretisation (and the numerical damping of BDF2), reported per
+output as ``energy_balance``.
+"""
+from dataclasses import replace
+
+import numpy as np
+
+from ..errors import ScenarioError
+from ..model.balance import load_markers
+from ..model.dynamics import KelvinVoigt, inertia_per_length
+from ..solvers.dynamics import RodDynamics
+
+#: the range of time steps [s] the dynamics is run on (tested down to 1e-5 s)
+STEP_RANGE = (1e-5, 0.1)
+#: a step that does not converge is halved at most this many times
+HALVINGS = 6
+ENERGY_COLUMNS = ("kinetic_energy", "elastic_energy", "gravitational_energy", "actuator_work", "load_work",
+                  "dissipated_energy", "energy_balance")
+
+
+def damping_of(config, scenario):
+    """The :class:`KelvinVoigt` of a scenario's ``dynamics.damping`` (None without one); a
+    damping ratio at a frequency uses the first module's material's Young's modulus."""
+    if config is None:
+        return None
+    if config.viscosity is not None:
+        return KelvinVoigt(config.viscosity, config.shear_viscosity)
+    material = scenario.materials[scenario.modules[0].material]
+    return KelvinVoigt.with_ratio(config.ratio, config.frequency, material.youngs_modulus)
+
+
+def check_dynamics(sim, dt):
+    """Bad input for a dynamic run, as a ScenarioError: a step outside :data:`STEP_RANGE`, a
+    massless module, point masses, connector masses or objects (their rigid inertia is not
+    modelled yet)."""
+    low, high = STEP_RANGE
+    if not low <= dt <= high:
+        raise ScenarioError(f"dynamics: --dt {dt:g} s is outside the range the dynamics is run on "
+                            f"({low:g} to {high:g} s)")
+    for module in sim.robot.modules:
+        if not module.weight_density > 0:
+            raise ScenarioError(f"dynamics: module {module.name} has no mass (materials.{module.material}.density is 0)")
+        if module.connector is not None and module.connector.mass > 0:
+            raise ScenarioError(f"dynamics: module {module.name}'s connector mass (a rigid inertia) is not modelled "
+                                "yet; set its mass to 0 or run without dynamics")
+    for load in sim.robot.point_loads:
+        if load.kind in ("mass", "object"):
+            raise ScenarioError(f"dynamics: {load.kind} {load.name!r} (a rigid inertia) is not modelled yet; "
+                                "run without dynamics")
+
+
+class EnergyAccount:
+    """The running energy account of a dynamic run (module docstring)."""
+
+    def __init__(self, dynamics):
+        self.dynamics = dynamics
+        self.rows = []
+        self._work = {"actuator_work": 0.0, "load_work": 0.0, "dissipated_energy": 0.0}
+        self._start = None
+
+    def stored(self, state, solution):
+        """``(kinetic, elastic, gravitational)`` [J] at a state and its Solution."""
+        robot, params = self.dynamics.sim.robot, solution.parameters
+        kinetic, elastic = self.dynamics.energies(state, params)
+        gravity = params[robot.layout["gravity"]]
+        param = robot.param_function(params)
+        potential = 0.0
+        for m, result in enumerate(solution.modules):
+            mass, _ = inertia_per_length(robot.modules[m], param)
+            potential -= float(mass * (gravity @ result.p) @ result.weights)
+        return kinetic, elastic, potential
+
+    def add(self, previous, state, solution, previous_solution):
+        """Account for the step from ``previous`` to ``state`` (StepStates, with their Solutions)."""
+        if previous is not None:
+            self._work["actuator_work"] -= sum(
+                0.5 * (a.tension + previous_solution.actuators[key].tension) * (a.length - previous_solution.actuators[key].length)
+                for key, a in solution.actuators.items())
+            self._work["load_work"] += _load_work(previous_solution, solution)
+            self._work["dissipated_energy"] += self._dissipated(previous, state)
+        stored = self.stored(state, solution)
+        if self._start is None:
+            self._start = sum(stored)
+        balance = (sum(stored) - self._start + self._work["dissipated_energy"] - self._work["actuator_work"]
+                   - self._work["load_work"])
+        self.rows.append((*stored, self._work["actuator_work"], self._work["load_work"],
+                          self._work["dissipated_energy"], balance))
+
+    def _dissipated(self, previous, state):
+        h = state.t - previous.t
+        total = 0.0
+        for m, ((before, _), (after, _)) in enumerate(zip(previous.nodes, state.nodes)):
+            change = after - before
+            weights = self.dynamics.solver.nlp.node_weights(m)[:-1]
+            density = np.sum(self.dynamics.damping[m][:, None] * change * change, axis=0) / h
+            total += float(density @ weights)
+        return total
+
+
+def _load_work(before, after):
+    """Work of the point loads between two solutions: trapezoidal force times displacement plus
+    moment times the rotation vector of the load point's frame change (small steps)."""
+    work = 0.0
+    for a, b in zip(before.loads, after.loads):
+        if a["kind"] != "point":
+            continue
+        work += 0.5 * float((a["force"] + b["force"]) @ (b["position"] - a["position"]))
+        if np.any(a["moment"]) or np.any(b["moment"]):
+            work += 0.5 * float((a["moment"] + b["moment"]) @ _rotation_between(before, after, a))
+    return work
+
+
+def _rotation_between(before, after, load):
+    """Rotation vector [rad] of the body frame at a point load from one solution to the next."""
+    def frame(solution):
+        module = next(m for m in solution.modules if np.any(np.all(np.isclose(m.p.T, load["position"]), axis=1)))
+        k = int(np.argmin(np.linalg.norm(module.p.T - load["position"], axis=1)))
+        return module.R[:, :, k]
+    change = frame(after) @ frame(before).T
+    return 0.5 * np.array([change[2, 1] - change[1, 2], change[0, 2] - change[2, 0], change[1, 0] - change[0, 1]])
+
+
+def follow_dynamics(sim, series, path, progress=None, initial=None):
+    """Fill ``series`` (a TimeSeries) with the motion at the parameter vectors ``path`` (one per
+    output time, each step's parameters running from one to the next): the static equilibrium
+    at ``initial`` (default ``path[0]``; the parameters before an event at the first output
+    time), then one implicit step per output time
+    (halved up to :data:`HALVINGS` times when Newton fails: the run stops, with the solutions
+    up to there, when even that fails). Adds ``series.tip_velocities`` (n, 3) [m/s] and
+    ``series.energies`` (n, 7) [J] (:data:`ENERGY_COLUMNS`)."""
+    config = sim.scenario.dynamics
+    base = sim.params.copy()
+    try:
+        sim.params = np.array(path[0] if initial is None else initial, float)
+        first = sim.solve(warn=False)
+    finally:
+        sim.params = base
+    if not first.converged:
+        series.message = f"no equilibrium at t = {series.t[0]:g} s: {first.message}"
+        return series
+    dynamics = RodDynamics(sim, config.integrator, damping_of(config.damping, sim.scenario))
+    state = dynamics.start(first, series.t[0])
+    state.params = np.array(path[0], float)         # the steps start from the values after any event at t0
+    account = EnergyAccount(dynamics)
+    series.solutions.append(first)
+    series.tip_velocities = [np.zeros(3)]
+    account.add(None, state, first, None)
+    if initial is not None:         # the first step's loads are those after any event at t0
+        first = replace(first, loads=load_markers(sim.robot.at(path[0]), first.modules, path[0]))
+    for k in range(1, len(path)):
+        previous, previous_solution = state, (first if k == 1 else series.solutions[-1])
+        state, solution = _advance(dynamics, path[k - 1], path[k], series.t[k] - series.t[k - 1])
+        if state is None:
+            series.message = (f"stopped at t = {series.t[k]:g} s: the step from t = {series.t[k - 1]:g} s did not "
+                              f"converge even halved {HALVINGS} times ({solution.message})")
+            break
+        if config.integrator == "midpoint":
+            solution = dynamics.end_solution(state, previous)
+        series.solutions.append(solution)
+        series.tip_velocities.append(dynamics.tip_velocity(state))
+        account.add(previous, state, solution, previous_solution)
+        if progress is not None:
+            progress((k + 1) / len(path), f"t = {series.t[k]:.4g} s")
+    series.tip_velocities = np.array(series.tip_velocities)
+    series.energies = np.array(account.rows)
+    if series.completed:
+        series.message = f"stepped {len(series.t) - 1} times (dynamics, {config.integrator})"
+    return series
+
+
+def _advance(dynamics, start, end, h):
+    """From the current state (at parameters ``start``) over ``h`` to parameters ``end``: one
+    step, or 2, 4, ... equal substeps (parameters linear in between) when Newton fails.
+    ``(state, solution)``; ``state`` None if the last attempt failed."""
+    start, end = np.asarray(start, float), np.asarray(end, float)
+    saved = list(dynamics.states)
+    for halving in range(HALVINGS + 1):
+        count = 2 ** halving
+        dynamics.states = list(saved)
+        for j in range(1, count + 1):
+            state, solution = dynamics.step(start + (end - start) * j / count, h / count)
+            if state is None:
+                break
+        else:
+            return state, solution
+    dynamics.states = saved
+    return None, solution

@@ -1,0 +1,100 @@
+"""``simulate`` with ``dynamics: {enabled: true}`` (issue 16): the files and the energy account,
+the tip velocity against the motion of the tip, a TCA step that rings at the module's first
+mode, slow heating against the quasi-static answer, bad input."""
+import json
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from conftest import SCENARIOS
+from tca_casadi import Simulation
+from tca_casadi.cli import main
+from tca_casadi.studies.spectrum import dominant_frequencies
+from tca_casadi.studies.timeline import TimeSimulation
+
+CANTILEVER = str(SCENARIOS / "analytic" / "released_cantilever.yaml")
+BENDING = str(SCENARIOS / "bending_module.yaml")
+RELEASE = ["dynamics={enabled: true, integrator: midpoint}", "duration=2",
+           "timeline=[{at: 0 s, set: {hold.force: [0, 0, 0]}}]"]
+COLD = ["bending.tca2.temperature=25", "bending.tca3.temperature=25"]
+
+
+def _sets(items):
+    return [arg for item in items for arg in ("--set", item)]
+
+
+def test_release_files_and_energy_account(tmp_path, capsys):
+    assert main(["simulate", CANTILEVER, *_sets(RELEASE), "--dt", "0.005", "-o", str(tmp_path), "--quiet",
+                 "--no-animation"]) == 0
+    assert "dynamics, midpoint" in capsys.readouterr().out
+    report = json.loads((tmp_path / "simulation.json").read_text())["dynamics"]
+    assert report["integrator"] == "midpoint" and report["energy_balance_relative"] < 1e-8
+    data = np.genfromtxt(tmp_path / "timeseries.csv", delimiter=",", names=True)
+    assert data["tip_x_m"][0] == pytest.approx(0.8695e-3, rel=1e-3) and data["tip_vx_ms"][0] == 0.0   # held, at rest
+    total = data["kinetic_energy_J"] + data["elastic_energy_J"]
+    assert_allclose(total, total[0], rtol=1e-8, atol=0)                         # undamped, no work done
+    assert np.max(data["kinetic_energy_J"]) > 0.9 * total[0]
+    assert np.all(data["dissipated_energy_J"] == 0) and np.all(data["actuator_work_J"] == 0)
+
+
+def test_the_tip_velocity_is_the_rate_of_the_tip_position():
+    """BDF2: the tip velocity ``R q`` from the velocity states against central differences of
+    the tip positions (to 1.5 % of the peak speed at 2.5 ms steps; the first two steps, after
+    the release's jump in acceleration, aside)."""
+    series = TimeSimulation(Simulation.from_file(CANTILEVER, [RELEASE[0].replace("midpoint", "bdf2")] + RELEASE[1:]),
+                            dt=0.0025).run()
+    t, x, v = series.t, series.tip_positions()[:, 0], series.tip_velocities[:, 0]
+    rate = (x[2:] - x[:-2]) / (t[2:] - t[:-2])
+    assert_allclose(v[3:-1], rate[2:], rtol=0, atol=0.015 * np.max(np.abs(v)))
+
+
+def test_a_temperature_step_rings_at_the_first_mode_and_overshoots():
+    """TCA 2 stepped from 25 to 35 degC at t = 0 (midpoint, 2 ms): the tip rings at the frequency
+    of the same module released from a small tip force at 35 degC (within 1 %: 5.17 against
+    5.14 Hz) and, undamped, overshoots to about twice the quasi-static displacement."""
+    base = ["dynamics={enabled: true, integrator: midpoint}", "duration=1.5", *COLD]
+    ring = TimeSimulation(Simulation.from_file(BENDING, base + [
+        "timeline=[{at: 0 s, set: {bending.tca2.temperature: 35}}]"]), dt=0.002).run()
+    free = TimeSimulation(Simulation.from_file(BENDING, base[:2] + [
+        "bending.tca2.temperature=35", "bending.tca3.temperature=25", "tip_force.force=[0.5 mN, 0, 0]",
+        "timeline=[{at: 0 s, set: {tip_force.force: [0, 0, 0]}}]"]), dt=0.002).run()
+    assert ring.completed and free.completed, (ring.message, free.message)
+    ringing = dominant_frequencies(ring.t, ring.tip_positions()[:, 1], count=1)[0]
+    released = dominant_frequencies(free.t, free.tip_positions()[:, 0], count=1)[0]
+    assert abs(ringing / released - 1) < 0.01 and 4.0 < released < 7.0, (ringing, released)
+    static = Simulation.from_file(BENDING, ["bending.tca2.temperature=35", "bending.tca3.temperature=25"]).solve(warn=False)
+    start = ring.tip_positions()[0]
+    peak = np.max(np.linalg.norm(ring.tip_positions() - start, axis=1))
+    assert 1.8 < peak / np.linalg.norm(static.tip_position - start) < 2.1
+
+
+def test_slow_heating_stays_on_the_quasi_static_shape():
+    """TCA 2 ramped from 25 to 60 degC over 3 s (much slower than the 5 Hz mode), 5 % damping,
+    BDF2 at 10 ms: the tip stays within 3 um of the quasi-static solve (the tip moves 3.6 mm)."""
+    settings = ["dynamics={enabled: true, integrator: bdf2, damping: {ratio: 0.05, frequency: 5.1 Hz}}",
+                "duration=3", *COLD, "timeline=[{at: 0 s, set: {bending.tca2.temperature: 60}, ramp: 3 s}]"]
+    series = TimeSimulation(Simulation.from_file(BENDING, settings), dt=0.01).run()
+    assert series.completed, series.message
+    for t in (0.5, 1.5, 3.0):
+        k = int(np.flatnonzero(np.isclose(series.t, t))[0])
+        static = Simulation.from_file(BENDING, ["bending.tca3.temperature=25",
+                                                f"bending.tca2.temperature={25 + 35 * t / 3}"]).solve(warn=False)
+        assert_allclose(series.solutions[k].tip_position, static.tip_position, rtol=0, atol=3e-6)
+
+
+@pytest.mark.parametrize("settings, words", [
+    (["dynamics={enabled: true}", "materials.ecoflex30.density=0", "duration=1"], "has no mass"),
+    (["dynamics={enabled: true, damping: {viscosity: -1 Pa s}}"], "greater than or equal to 0"),
+    (["dynamics={enabled: true, damping: {ratio: 0.05}}"], "needs the frequency"),
+    (["dynamics={enabled: true, damping: {ratio: 0.05, frequency: 5 Hz, viscosity: 10 Pa s}}"], "either viscosity"),
+    (["dynamics={enabled: true, integrator: rk4}"], "integrator"),
+    (["dynamics={enabled: true}", "duration=1", "--dt=0.5"], "outside the range"),
+])
+def test_bad_dynamics_input_is_one_line(tmp_path, capsys, settings, words):
+    dt = [s.split("=", 1)[1] for s in settings if s.startswith("--dt=")]
+    sets = [s for s in settings if not s.startswith("--dt=")]
+    assert main(["simulate", BENDING, *_sets(sets), "--dt", dt[0] if dt else "0.01", "-o", str(tmp_path),
+                 "--quiet", "--no-animation"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and words in err[0], err
