@@ -205,6 +205,36 @@ def simulate_cycle(dt, repeats, jit=False):
             f"simulate{suffix}_real_time_factor": 60.0 / seconds, f"simulate{suffix}_completed": bool(series.completed)}
 
 
+#: dynamics benchmarks: scenario, overrides (no connector mass: rigid inertias are not modelled yet)
+DYNAMIC_PROBLEMS = {"bending module": ("bending_module", ["bending.tca2.temperature=25", "bending.tca3.temperature=25"]),
+                    "arm": ("arm", ["finger_a.connector.mass=0"])}
+
+
+def dynamics_rate(name, dt, steps):
+    """Real-time factor (simulated seconds per wall second) of BDF2 dynamics: the median step time
+    over ``steps`` steps of ``dt`` after a TCA's temperature steps by 10 degC (the static start
+    and the dynamic NLP's build not timed)."""
+    from tca_casadi.solvers.dynamics import RodDynamics
+    scenario, overrides = DYNAMIC_PROBLEMS[name]
+    sim = Simulation.from_file(SCENARIOS / f"{scenario}.yaml", overrides)
+    static = sim.solve(warn=False)
+    dynamics = RodDynamics(sim, "bdf2")
+    state = dynamics.start(static)
+    params = sim.params.copy()
+    key = sim.robot.tcas[0].parameter
+    params[sim.robot.layout[key]] += 10.0
+    state.params = params
+    times = []
+    for _ in range(steps):
+        started = time.perf_counter()
+        state, solution = dynamics.step(params, dt)
+        times.append(time.perf_counter() - started)
+        if state is None:
+            return {"dt_s": dt, "step_s": None, "real_time_factor": None, "message": solution.message}
+    step = float(np.median(times))
+    return {"dt_s": dt, "step_s": step, "real_time_factor": dt / step, "unknowns": int(dynamics.solver.nlp.scale.size)}
+
+
 def check_times(names):
     """``tca-casadi check`` on shipped scenarios: collocation and shooting seconds, agreement."""
     from tca_casadi.studies import check
@@ -282,6 +312,8 @@ def main(argv=None):
     cycle = simulate_cycle(1.0 if args.quick else 0.1, 1 if args.quick else 5)
     if not args.quick:                     # the compiled residual (its one-time compile not timed)
         cycle.update(simulate_cycle(0.1, 5, jit=True))
+    motion = {name: [dynamics_rate(name, dt, 5 if args.quick else 50) for dt in (0.002, 0.01)]
+              for name in (["bending module"] if args.quick else list(DYNAMIC_PROBLEMS))}
     checks = check_times(["bending_module"] if args.quick else
                          ["bending_module", "twisting_module", "tendon_robot", "tendon_robot_two_segments",
                           "arm", "arm_pick_and_place", "analytic/pure_moment", "analytic/tip_load",
@@ -296,9 +328,14 @@ def main(argv=None):
           f"{cycle['simulate_real_time_factor']:.0f}x real time" + (
               f"; with solver.jit {cycle['simulate_jit_s']:.2f} s, {cycle['simulate_jit_real_time_factor']:.0f}x"
               if "simulate_jit_s" in cycle else ""))
+    for name, runs in motion.items():
+        print(f"dynamics (BDF2) {name}: " + ", ".join(
+            f"dt {r['dt_s'] * 1e3:g} ms: {r['step_s'] * 1e3:.2f} ms per step, {r['real_time_factor']:.2f}x real time"
+            if r["step_s"] else f"dt {r['dt_s'] * 1e3:g} ms: failed ({r['message']})" for r in runs))
     print(f"measured {machine['date']} on {machine['cpus']} CPUs, Python {machine['python']}")
     args.output.parent.mkdir(parents=True, exist_ok=True)
     args.output.write_text(json.dumps({"quick": args.quick, "machine": machine, "startup": started, "simulate": cycle,
+                                       "dynamics": motion,
                                        "check": checks, "rows": rows}, indent=2))
     print(f"wrote {args.output}")
     return rows

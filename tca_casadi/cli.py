@@ -367,8 +367,9 @@ def _simulate(args):
     print(timed.summary(series))
     if not args.no_animation and series.solutions:
         from .plotting.animation import save_time_animation
-        paths, speed_up = _with_progress(lambda progress: save_time_animation(series, output, progress=progress),
-                                         "animation", quiet=args.quiet)
+        moving = {"fps": 20, "max_frames": 200} if sim.scenario.dynamics.enabled else {}   # motion: finer in time
+        paths, speed_up = _with_progress(lambda progress: save_time_animation(series, output, progress=progress,
+                                                                              **moving), "animation", quiet=args.quiet)
         written += paths
         print(f"animation at {'real time' if speed_up == 1 else f'{speed_up}x real time'}")
     print("wrote " + ", ".join(str(p) for p in written))

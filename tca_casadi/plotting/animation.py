@@ -108,7 +108,7 @@ def save_time_animation(series, directory, fps=10, max_frames=150, progress=None
     speed_up = animation_speed_up(t[-1] - t[0], fps, max_frames)
     frames = frame_indices(t, fps, speed_up)
     heated = [j for j in range(len(series.keys)) if not np.all(np.isnan(series.powers[:n, j]))]
-    ambient = float(np.nanmin(series.temperatures[:n])) if n else 0.0
+    ambient = float(np.nanmin(series.temperatures[:n])) if n and series.temperatures.size else 0.0
     points = [m.p for s in series.solutions for m in s.modules]
     points += [pose.corners() for poses in series.objects for pose in poses.values()]
     every = np.hstack(points) * 1e3

@@ -57,7 +57,7 @@ def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_point
     style_axes(ax)
     state = "" if solution.converged else "  (NOT CONVERGED)"
     ax.set_title(title or f"{solution.scenario_name}{state}", fontsize=10)
-    if solution.actuators or extra_points or objects or solution.loads:
+    if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="upper left", fontsize=7)
     return ax
 

@@ -25,6 +25,9 @@ def save_timeseries_png(series, path, events=()):
         for axis, name in enumerate("xyz"):
             axes[3].plot(t, move[:, axis], label=f"tip {name}", **line_style(axis, n))
         axes[3].plot(t, np.linalg.norm(move, axis=1), color="black", label="|tip displacement|", **line_style(3, n))
+    if not axes[1].get_lines():
+        axes[1].text(0.5, 0.5, "no electrically heated TCA (temperatures set)", ha="center", va="center",
+                     transform=axes[1].transAxes, fontsize=9, color="0.4")
     labels = ["temperature [degC]", "electrical power [mW]", "tension [mN]", "tip displacement [mm]"]
     for ax, label in zip(axes, labels):
         ax.set_ylabel(label)

@@ -364,6 +364,10 @@ class TimeSimulation:
             down = ", ".join(f"{t:g}" for t in entry["put_down_at"]) or "never"
             centre = " ".join(f"{v * 1e3:+.2f}" for v in entry["final_center"])
             lines.append(f"  {name}: picked at {picked} s, put down at {down} s; ends at [{centre}] mm")
+        if report["dynamics"] is not None:
+            motion = report["dynamics"]
+            lines.append(f"  dynamics ({motion['integrator']}): peak tip speed {motion['peak_tip_speed'] * 1e3:.4g} mm/s, "
+                         f"energy balance {motion['energy_balance_relative']:.1e} of the energy in play")
         lines += [f"  warning: {w}" for w in report["warnings"]]
         return "\n".join(lines)
 
