@@ -194,6 +194,15 @@ class CollocationNLP:
         """The viscous wrench at module m's base (6,), or None (statics)."""
         return None
 
+    def _base_inertia(self, m):
+        """Inertial wrench of the point masses at module m's base (its frame), or None."""
+        return None
+
+    def _tip_inertia(self, m):
+        """Inertial wrench at module m's tip (its frame): its point masses' and its children's
+        connector masses', or None (statics)."""
+        return None
+
     def _route_data(self, m, s, active):
         """Route values ``[r; r'; r'']`` (9, nA npts) at the points ``s`` (zero where inactive),
         column ``j nA + k`` for actuator k at point j: each route's unit data placed by its
@@ -244,7 +253,8 @@ class CollocationNLP:
 
     def _base_wrench(self, m, start):
         """Internal wrench just before the module's base, ``W(0-) = W(0+) + point wrenches``."""
-        return boundary.base_wrench(self.robot, m, start, self.tension_of, self.param, self._viscous_start(m))
+        return boundary.base_wrench(self.robot, m, start, self.tension_of, self.param, self._viscous_start(m),
+                                    self._base_inertia(m))
 
     # ------------------------------------------------------------------ links
     def _link_intervals(self, m, ends, starts, viscous=None):
@@ -279,7 +289,8 @@ class CollocationNLP:
             self._g.append((start[P_] - position) / module.length)
             self._g.append(start[H_] - quaternion)
         viscous = {c: self._viscous_start(c) for c in starts} | {m: self._viscous_ends.get(m)}
-        balance = boundary.tip_balance(self.robot, m, end, starts, self.tension_of, self.param, viscous)
+        extra = {c: self._base_inertia(c) for c in starts} | {m: self._tip_inertia(m)}
+        balance = boundary.tip_balance(self.robot, m, end, starts, self.tension_of, self.param, viscous, extra)
         self._g.append(balance * self._wrench_scale(m))
 
     # ------------------------------------------------------------------ TCA law

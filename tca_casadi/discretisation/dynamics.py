@@ -26,8 +26,8 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ScenarioError
-from ..model.boundary import connector_of
-from ..model.dynamics import inertia_per_length, inertial_loads, velocity_rates
+from ..model.boundary import add, connector_of, loads_at
+from ..model.dynamics import inertia_per_length, inertial_loads, point_inertia, point_mass_of, velocity_rates
 from .collocation import CollocationNLP, _end_matrix
 
 #: history values per node: strain deviations (6), q (3), w (3)
@@ -100,6 +100,49 @@ class DynamicCollocationNLP(CollocationNLP):
         c0 = self.P[self.c0_index]
         damping = self.P[self.damping_index[m].tolist()]
         return damping * (c0 * self._states[m][7:13, 0] + self._history(m, [0])[0:6, 0])
+
+    # ------------------------------------------------------------------ rigid point inertias
+    def _motion_at(self, m, where):
+        """``(q, w, q_t, w_t)`` (3,) each of module m at node column ``where`` or at its tip
+        (``where`` None: the end of the last interval)."""
+        c0 = self.P[self.c0_index]
+        Y = self._velocities[m]
+        columns = list(range(Y.shape[1]))
+        rates = c0 * Y + self._history(m, columns)[6:12, :]
+        if where is None:
+            end = _end_matrix(self.scheme, len(self.meshes[m].intervals))[:, -1]
+            y, y_t = Y @ end, rates @ end
+        else:
+            y, y_t = Y[:, where], rates[:, where]
+        return y[0:3], y[3:6], y_t[0:3], y_t[3:6]
+
+    def _masses_at(self, m, s, where):
+        """Inertial wrench (its frame) of the point masses and held objects at s of module m."""
+        total = None
+        for load in loads_at(self.robot, m, s):
+            mass = point_mass_of(load, self.param)
+            if load.kind != "point":
+                total = add(total, point_inertia(mass, *self._motion_at(m, where)))
+        return total
+
+    def _point_wrenches(self, m, s, before, after):
+        static = super()._point_wrenches(m, s, before, after)
+        starts = [k for k, (s0, _) in enumerate(self.meshes[m].intervals) if abs(s0 - s) <= 1e-12 * self.robot.modules[m].length]
+        if not starts:
+            return static
+        return add(static, self._masses_at(m, s, starts[0] * (self.scheme.degree + 1)))
+
+    def _base_inertia(self, m):
+        return self._masses_at(m, 0.0, 0)
+
+    def _tip_inertia(self, m):
+        module = self.robot.modules[m]
+        total = self._masses_at(m, module.length, None)
+        for c in self.robot.children(m):
+            connector = self.robot.modules[c].connector
+            if connector is not None and connector.mass > 0:
+                total = add(total, point_inertia(connector.mass, *self._motion_at(m, None), offset=connector.center_of_mass))
+        return total
 
     def _rates(self, m, Xc, colloc):
         """``(xi_t (6, k), y (6, k), y_t (6, k))`` at the collocation points of module m."""

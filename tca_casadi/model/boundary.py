@@ -154,24 +154,26 @@ def child_wrench(end, child, base_wrench, param):
     return total
 
 
-def base_wrench(robot, m, start, tension, param, viscous=None):
+def base_wrench(robot, m, start, tension, param, viscous=None, extra=None):
     """``W(0-)`` of module m: the internal wrench at its start plus the point wrenches there
-    (what its base support, or its parent's tip, carries). ``viscous``: the viscous part of the
-    internal wrench at the start (dynamics), (6,), or None."""
+    (what its base support, or its parent's tip, carries). Dynamics: ``viscous``, the viscous
+    part of the internal wrench at the start, and ``extra``, further applied wrenches there
+    (point masses' inertia), (6,) each or None."""
     internal = add(internal_wrench(robot.modules[m], start, param), viscous)
-    return add(internal, point_wrenches(robot, m, 0.0, None, start, tension, param))
+    return add(add(internal, point_wrenches(robot, m, 0.0, None, start, tension, param)), extra)
 
 
-def tip_balance(robot, m, end, starts, tension, param, viscous=None):
+def tip_balance(robot, m, end, starts, tension, param, viscous=None, extra=None):
     """``W(L) - point wrenches at L - sum of what the children in ``starts`` ({child: start
     state}) put on the tip`` (parent tip frame, SPEC section 5): zero at equilibrium when every
-    child is included; with some left out, what those must carry. ``viscous``: the viscous
-    parts of the internal wrenches (dynamics), ``{m: at the tip, c: at child c's base}``."""
-    module, viscous = robot.modules[m], viscous or {}
-    applied = point_wrenches(robot, m, module.length, end, None, tension, param)
+    child is included; with some left out, what those must carry. Dynamics: ``viscous``, the
+    viscous parts of the internal wrenches, and ``extra``, further applied wrenches (inertia of
+    point and connector masses), each ``{m: at the tip (its frame), c: at child c's base}``."""
+    module, viscous, extra = robot.modules[m], viscous or {}, extra or {}
+    applied = add(point_wrenches(robot, m, module.length, end, None, tension, param), extra.get(m))
     balance = add(internal_wrench(module, end, param), viscous.get(m)) - add(ca.DM.zeros(6), applied)
     for c, start in starts.items():
-        base = base_wrench(robot, c, start, tension, param, viscous.get(c))
+        base = base_wrench(robot, c, start, tension, param, viscous.get(c), extra.get(c))
         balance = balance - child_wrench(end, robot.modules[c], base, param)
     return balance
 

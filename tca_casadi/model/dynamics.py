@@ -75,6 +75,30 @@ def inertial_loads(q, w, q_t, w_t, mass, rotary):
     return -mass * (q_t + ca.cross(w, q)), -(rotary * w_t + ca.cross(w, spin))
 
 
+def point_mass_of(load, param):
+    """The mass [kg] a point load carries: a ``mass`` load's, a held object's share
+    (``held * mass * share``, as its weight), none for a force."""
+    if load.kind == "mass":
+        return param(f"{load.name}.mass")[0]
+    if load.kind == "object":
+        return param(f"{load.name}.held")[0] * param(f"{load.name}.mass")[0] * load.share
+    return 0.0
+
+
+def point_inertia(mass, q, w, q_t, w_t, offset=None):
+    """Body-frame wrench ``[moment; force]`` of a rigid point mass fixed in the section's frame
+    at ``offset`` (3,) from the centreline (None: on it): ``F = -mass a`` with the body-frame
+    acceleration ``a = q_t + w x q + w_t x c + w x (w x c)``, and ``c x F`` (its rotary inertia
+    about its own centre neglected). Numbers or CasADi symbols."""
+    acceleration = q_t + ca.cross(w, q)
+    if offset is not None:
+        c = ca.DM(offset)
+        acceleration = acceleration + ca.cross(w_t, c) + ca.cross(w, ca.cross(w, c))
+        force = -mass * acceleration
+        return ca.vertcat(ca.cross(c, force), force)
+    return ca.vertcat(ca.DM.zeros(3), -mass * acceleration)
+
+
 def kinetic_energy_density(q, w, mass, rotary):
     """``rho A |q|^2 / 2 + w . rho J w / 2`` [J/m] at each node (q, w: (3, n) numpy)."""
     return 0.5 * mass * np.sum(q * q, axis=0) + 0.5 * np.sum(np.asarray(rotary)[:, None] * w * w, axis=0)

@@ -27,6 +27,12 @@ from ..model.dynamics import elastic_energy_density, inertia_per_length, kinetic
 from ..model.rotations import rotation_numpy, rotations_of
 from .collocation import CollocationSolver
 
+
+def ca_dm(value):
+    """A numpy vector as a CasADi DM column (for the model's CasADi-or-number functions)."""
+    import casadi as ca
+    return ca.DM(np.asarray(value, float))
+
 INTEGRATORS = ("bdf2", "midpoint", "bdf1")
 
 
@@ -75,7 +81,62 @@ class DynamicSolver(CollocationSolver):
             points.append(states[0:3, :-1])
             forces.append(np.einsum("ijk,jk->ik", R, force) * weight)
             moments.append(np.einsum("ijk,jk->ik", R, moment) * weight)
+        for point, force, moment in self._rigid_inertias(w, params, module_data):
+            points.append(point[:, None])
+            forces.append(force[:, None])
+            moments.append(moment[:, None])
         return np.hstack(points), np.hstack(forces), np.hstack(moments)
+
+    def rigid_points(self, w, params, frame):
+        """The rigid point masses at the variables ``w``: point masses, held objects' shares and
+        connector masses, as ``(mass [kg], offset (3,) or None, (q, w, q_t, w_t) (3,) each,
+        position (3,), R (3, 3))`` in the frame of the section they ride on; ``frame(m,
+        column)`` gives ``(p, R)`` of module m at a node column (-1: its tip)."""
+        nlp, robot, d = self.nlp, self.robot, self.degree
+        from ..model.dynamics import point_mass_of
+        c0 = params[nlp.c0_index]
+        param = robot.param_function(params[:robot.layout.size])
+        nodes = self.node_values(w)
+
+        def motion(m, s):
+            velocity = nodes[m][1]
+            rates = c0 * velocity + params[nlp.history_index[m]].T[6:12]
+            if s >= robot.modules[m].length * (1 - 1e-12):          # the tip: the last interval's end
+                return tuple(np.split(np.r_[velocity[:, -(d + 1):] @ nlp.scheme.D,
+                                            rates[:, -(d + 1):] @ nlp.scheme.D], 4)), -1
+            k = next(k for k, (s0, _) in enumerate(nlp.meshes[m].intervals)
+                     if abs(s0 - s) <= 1e-12 * robot.modules[m].length)
+            column = k * (d + 1)
+            return tuple(np.split(np.r_[velocity[:, column], rates[:, column]], 4)), column
+
+        out = []
+        for load in robot.point_loads:
+            mass = float(point_mass_of(load, param))
+            if load.kind != "point" and mass > 0:
+                kinematics, column = motion(load.module, load.s)
+                out.append((mass, None, kinematics, *frame(load.module, column)))
+        for module in robot.modules:
+            if module.connector is not None and module.connector.mass > 0:
+                kinematics, _ = motion(module.parent, robot.modules[module.parent].length)
+                out.append((module.connector.mass, module.connector.center_of_mass, kinematics,
+                            *frame(module.parent, -1)))
+        return out
+
+    def _rigid_inertias(self, w, params, module_data):
+        """``(point, force, moment)`` (3,) each, global: the inertial loads of :meth:`rigid_points`
+        (:func:`~tca_casadi.model.dynamics.point_inertia`, rotated to the global frame)."""
+        from ..model.dynamics import point_inertia
+
+        def frame(m, column):
+            states = module_data[m][1]
+            return states[0:3, column], rotation_numpy(states[3:7, column])
+
+        out = []
+        for mass, offset, kinematics, position, R in self.rigid_points(w, params, frame):
+            wrench = np.array(point_inertia(mass, *(ca_dm(v) for v in kinematics), offset=offset)).ravel()
+            point = position if offset is None else position + R @ offset
+            out.append((point, R @ wrench[3:6], np.zeros(3)))
+        return out
 
 
 @dataclass
@@ -174,13 +235,19 @@ class RodDynamics:
         q_end = last @ nlp.scheme.D
         return rotation_numpy(ends[3:7, tip]) @ q_end[0:3]
 
-    def end_solution(self, state, previous):
-        """The :class:`Solution` of the end state of a midpoint step (extrapolated), with the
-        accelerations ``(y_{n+1} - y_n) / h`` in its global balance and the step's status."""
+    def end_solution(self, state, previous, solved):
+        """The :class:`Solution` of the end state of a midpoint step (extrapolated, not itself a
+        solution of the step's equations), with the step's status and the global balance of the
+        solved midpoint state ``solved`` (an extrapolated state has no consistent acceleration
+        to balance)."""
+        from dataclasses import replace
         h = state.t - previous.t
         histories = [-np.vstack(nodes) / h for nodes in previous.nodes]
         full = self.solver.parameters(state.params, 1.0 / h, self.damping, histories)
-        return self.solver.evaluate(state.w, full, self.last_status)
+        end = self.solver.evaluate(state.w, full, self.last_status)
+        warnings = [w for w in end.warnings if w.kind != "global_balance"] + \
+                   [w for w in solved.warnings if w.kind == "global_balance"]
+        return replace(end, balance=solved.balance, warnings=warnings)
 
     def tip_position(self, state):
         """The tip [m] (3,) at ``state`` (the end of the tip module, from the node values)."""
@@ -188,8 +255,26 @@ class RodDynamics:
         _, ends, _ = self.solver._outputs_at(state.w, np.zeros(nlp.parameter_size))
         return ends[0:3, self.sim.robot.tip_index]
 
+    def rigid_energies(self, state, solution, params=None):
+        """``(kinetic, gravitational)`` [J] of the rigid point masses at ``state`` (its
+        :class:`Solution` gives their frames): ``M |R (q + w x c)|^2 / 2`` and ``-M g . x``;
+        the masses (and gravity) from ``params`` (default the solution's)."""
+        def frame(m, column):
+            module = solution.modules[m]
+            return module.p[:, column], module.R[:, :, column]
+        params = solution.parameters if params is None else np.asarray(params, float)
+        full = self.solver.parameters(params, 0.0, self.damping,
+                                      [np.zeros((12, nodes[0].shape[1])) for nodes in state.nodes])
+        gravity = params[self.sim.robot.layout["gravity"]]
+        kinetic = potential = 0.0
+        for mass, offset, (q, w, _, _), position, R in self.solver.rigid_points(state.w, full, frame):
+            c = np.zeros(3) if offset is None else np.asarray(offset, float)
+            kinetic += 0.5 * mass * float(np.sum((R @ (q + np.cross(w, c))) ** 2))
+            potential -= mass * float(gravity @ (position + R @ c))
+        return kinetic, potential
+
     def energies(self, state, params):
-        """``(kinetic, elastic)`` [J] of the rod at ``state`` (Gauss quadrature on the nodes)."""
+        """``(kinetic, elastic)`` [J] of the rods at ``state`` (Gauss quadrature on the nodes)."""
         param = self.sim.robot.param_function(params)
         kinetic = elastic = 0.0
         for m, (deviation, velocity) in enumerate(state.nodes):

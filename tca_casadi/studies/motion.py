@@ -3,10 +3,12 @@ time step per output time (:class:`~tca_casadi.solvers.dynamics.RodDynamics`) fr
 equilibrium at t = 0, the TCAs' temperatures and every other parameter from the timeline as in
 the quasi-static run, and the energy account of the motion.
 
-Energies at each output time [J]: kinetic ``int (rho A |q|^2 + w . rho J w) / 2 ds``, elastic
-``int (xi - xi*) . K (xi - xi*) / 2 ds``, gravitational ``-int rho A g . p ds``; and from t = 0:
+Energies at each output time [J]: kinetic ``int (rho A |q|^2 + w . rho J w) / 2 ds`` plus the
+rigid point masses' ``M |v|^2 / 2``, elastic ``int (xi - xi*) . K (xi - xi*) / 2 ds``,
+gravitational ``-int rho A g . p ds - sum M g . x``; and from t = 0:
 the work the actuators do on the body, ``-sum_i int F_i dl_i`` (a TCA that shortens while it
-pulls does positive work), the work of the point loads ``int F . dp + M . dtheta``, and the
+pulls does positive work), the work of the point loads ``int F . dp + M . dtheta`` (and the
+energy a point mass takes with it when it changes: an object let go), and the
 energy the rods' viscosity dissipated, ``int int xi_t . B xi_t ds dt`` (all in time by the
 trapezoidal rule, ``xi_t`` as ``(xi_{n+1} - xi_n) / h``). Their balance
 
@@ -45,9 +47,8 @@ def damping_of(config, scenario):
 
 
 def check_dynamics(sim, dt):
-    """Bad input for a dynamic run, as a ScenarioError: a step outside :data:`STEP_RANGE`, a
-    massless module, point masses, connector masses or objects (their rigid inertia is not
-    modelled yet)."""
+    """Bad input for a dynamic run, as a ScenarioError: a step outside :data:`STEP_RANGE` or a
+    massless module."""
     low, high = STEP_RANGE
     if not low <= dt <= high:
         raise ScenarioError(f"dynamics: --dt {dt:g} s is outside the range the dynamics is run on "
@@ -55,13 +56,6 @@ def check_dynamics(sim, dt):
     for module in sim.robot.modules:
         if not module.weight_density > 0:
             raise ScenarioError(f"dynamics: module {module.name} has no mass (materials.{module.material}.density is 0)")
-        if module.connector is not None and module.connector.mass > 0:
-            raise ScenarioError(f"dynamics: module {module.name}'s connector mass (a rigid inertia) is not modelled "
-                                "yet; set its mass to 0 or run without dynamics")
-    for load in sim.robot.point_loads:
-        if load.kind in ("mass", "object"):
-            raise ScenarioError(f"dynamics: {load.kind} {load.name!r} (a rigid inertia) is not modelled yet; "
-                                "run without dynamics")
 
 
 class EnergyAccount:
@@ -73,8 +67,9 @@ class EnergyAccount:
         self._work = {"actuator_work": 0.0, "load_work": 0.0, "dissipated_energy": 0.0}
         self._start = None
 
-    def stored(self, state, solution):
-        """``(kinetic, elastic, gravitational)`` [J] at a state and its Solution."""
+    def stored(self, state, solution, masses=None):
+        """``(kinetic, elastic, gravitational)`` [J] at a state and its Solution (the point
+        masses from the parameters ``masses``, default the solution's)."""
         robot, params = self.dynamics.sim.robot, solution.parameters
         kinetic, elastic = self.dynamics.energies(state, params)
         gravity = params[robot.layout["gravity"]]
@@ -83,7 +78,8 @@ class EnergyAccount:
         for m, result in enumerate(solution.modules):
             mass, _ = inertia_per_length(robot.modules[m], param)
             potential -= float(mass * (gravity @ result.p) @ result.weights)
-        return kinetic, elastic, potential
+        rigid_kinetic, rigid_potential = self.dynamics.rigid_energies(state, solution, masses)
+        return kinetic + rigid_kinetic, elastic, potential + rigid_potential
 
     def add(self, previous, state, solution, previous_solution):
         """Account for the step from ``previous`` to ``state`` (StepStates, with their Solutions)."""
@@ -94,6 +90,9 @@ class EnergyAccount:
             self._work["load_work"] += _load_work(previous_solution, solution)
             self._work["dissipated_energy"] += self._dissipated(previous, state)
         stored = self.stored(state, solution)
+        if previous is not None:            # a point mass that changed (an object let go or taken) takes or brings its energy
+            kept = self.stored(state, solution, previous_solution.parameters)
+            self._work["load_work"] += sum(stored) - sum(kept)
         if self._start is None:
             self._start = sum(stored)
         balance = (sum(stored) - self._start + self._work["dissipated_energy"] - self._work["actuator_work"]
@@ -170,7 +169,7 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
                               f"converge even halved {HALVINGS} times ({solution.message})")
             break
         if config.integrator == "midpoint":
-            solution = dynamics.end_solution(state, previous)
+            solution = dynamics.end_solution(state, previous, solution)
         series.solutions.append(solution)
         series.tip_velocities.append(dynamics.tip_velocity(state))
         account.add(previous, state, solution, previous_solution)

@@ -326,7 +326,8 @@ class TimeSimulation:
             changes = [k for k in range(1, len(held)) if held[k] != held[k - 1]]
             out[name] = {"picked_at": [float(series.t[k]) for k in changes if held[k]],
                          "put_down_at": [float(series.t[k]) for k in changes if not held[k]],
-                         "final_center": series.objects[-1][name].center.tolist(), "held_at_end": held[-1]}
+                         "final_center": series.objects[-1][name].center.tolist(), "held_at_end": held[-1],
+                         "held_at_start": held[0]}
         return out
 
     def _responses(self, series, reached):
@@ -360,10 +361,12 @@ class TimeSimulation:
             tip = series.solutions[-1].tip_position * 1e3
             lines.append("  tip at the end [mm]: " + " ".join(f"{v:+.4f}" for v in tip))
         for name, entry in report["objects"].items():
-            picked = ", ".join(f"{t:g}" for t in entry["picked_at"]) or "never"
+            picked = ", ".join(f"{t:g}" for t in entry["picked_at"]) or ("held from the start" if entry["held_at_start"]
+                                                                       else "never")
             down = ", ".join(f"{t:g}" for t in entry["put_down_at"]) or "never"
             centre = " ".join(f"{v * 1e3:+.2f}" for v in entry["final_center"])
-            lines.append(f"  {name}: picked at {picked} s, put down at {down} s; ends at [{centre}] mm")
+            picked = picked if picked.startswith("held") else f"picked at {picked} s"
+            lines.append(f"  {name}: {picked}, put down at {down} s; ends at [{centre}] mm")
         if report["dynamics"] is not None:
             motion = report["dynamics"]
             lines.append(f"  dynamics ({motion['integrator']}): peak tip speed {motion['peak_tip_speed'] * 1e3:.4g} mm/s, "
