@@ -17,17 +17,24 @@ EI, RHO_A = E * np.pi * D ** 4 / 64, RHO * np.pi * D ** 2 / 4
 F1, F2 = (beta ** 2 * np.sqrt(EI / (RHO_A * L ** 4)) / (2 * np.pi) for beta in (1.8751, 4.6941))
 
 
+def at_rest_then(sim, path, value, integrator, damping=None):
+    """``(dynamics, state, params, static)``: ``sim``'s static equilibrium as the state at rest,
+    the parameter ``path`` set to ``value`` from t = 0+."""
+    static = sim.solve(warn=False)
+    dynamics = RodDynamics(sim, integrator, damping)
+    state = dynamics.start(static)
+    params = sim.params.copy()
+    params[sim.robot.layout[path]] = value
+    state.params = params
+    return dynamics, state, params, static
+
+
 def released(integrator, step, periods, damping=None, overrides=()):
     """Release the held cantilever; ``(t, tip x, energies (n, 2), worst balance)`` over
     ``periods`` first-mode periods at ``step`` [s] (the parameters after the release from the
     first step on)."""
     sim = Simulation.from_file(CANTILEVER, list(overrides))
-    static = sim.solve(warn=False)
-    dynamics = RodDynamics(sim, integrator, damping)
-    state = dynamics.start(static)
-    params = sim.params.copy()
-    params[sim.robot.layout["hold.force"]] = 0.0
-    state.params = params                              # released at t = 0+
+    dynamics, state, params, static = at_rest_then(sim, "hold.force", 0.0, integrator, damping)   # released at 0+
     t, tip, energies, balance = [0.0], [static.tip_position[0]], [dynamics.energies(state, params)], 0.0
     for _ in range(int(round(periods / F1 / step))):
         state, solution = dynamics.step(params, step)
@@ -98,11 +105,8 @@ def test_a_damped_run_settles_on_the_static_equilibrium():
     after 8 periods the tip is the static equilibrium under the halved force to 1e-8 m."""
     damping = KelvinVoigt.with_ratio(0.3, F1, E)
     sim = Simulation.from_file(CANTILEVER)
-    dynamics = RodDynamics(sim, "bdf2", damping)
-    state = dynamics.start(sim.solve(warn=False))
-    params = sim.params.copy()
-    params[sim.robot.layout["hold.force"]] *= 0.5
-    state.params = params
+    halved = 0.5 * sim.params[sim.robot.layout["hold.force"]]
+    dynamics, state, params, _ = at_rest_then(sim, "hold.force", halved, "bdf2", damping)
     for _ in range(8 * 20):
         state, solution = dynamics.step(params, 1 / F1 / 20)
     settled = Simulation.from_file(CANTILEVER, ["hold.force=[5 uN, 0, 0]"]).solve(warn=False)
@@ -120,12 +124,7 @@ def test_tiny_steps_converge_and_balance(step):
     that unresolved wave front (8.5e-6 at 1e-5 s; 1.5e-9 in the free-vibration test)."""
     sim = Simulation.from_file(SCENARIOS / "bending_module.yaml", ["bending.tca2.temperature=25",
                                                                    "bending.tca3.temperature=25"])
-    static = sim.solve(warn=False)
-    dynamics = RodDynamics(sim, "bdf2")
-    state = dynamics.start(static)
-    params = sim.params.copy()
-    params[sim.robot.layout["bending.tca2.temperature"]] = 35.0
-    state.params = params
+    dynamics, state, params, static = at_rest_then(sim, "bending.tca2.temperature", 35.0, "bdf2")
     for _ in range(20):
         state, solution = dynamics.step(params, step)
         assert state is not None, solution.message
@@ -144,13 +143,8 @@ def test_a_tip_mass_lowers_the_first_mode_as_the_beam_with_a_tip_mass_says():
     expected = beta ** 2 * np.sqrt(EI / (RHO_A * L ** 4)) / (2 * np.pi)
     loads = ("loads=[{name: hold, kind: point, module: rod, at: end, force: [10 uN, 0, 0]},"
              " {name: weight, kind: mass, module: rod, at: end, mass: 2 g}]")
-    sim = Simulation.from_file(CANTILEVER, [loads])
-    static = sim.solve(warn=False)
-    dynamics = RodDynamics(sim, "midpoint")
-    state = dynamics.start(static)
-    params = sim.params.copy()
-    params[sim.robot.layout["hold.force"]] = 0.0
-    state.params = params
+    dynamics, state, params, static = at_rest_then(Simulation.from_file(CANTILEVER, [loads]), "hold.force", 0.0,
+                                                   "midpoint")
     t, x = [0.0], [static.tip_position[0]]
     for _ in range(500):
         state, solution = dynamics.step(params, 1 / expected / 100)
