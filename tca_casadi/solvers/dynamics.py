@@ -171,6 +171,7 @@ class RodDynamics:
         self.damping = [np.zeros(6) if damping is None else damping.matrix(module)
                         for module in sim.robot.modules]
         self.states = []                     # StepState s, the last two kept
+        self._midpoints = []                 # the midpoint rule's solved states, the last two
         self._lu = None
 
     def start(self, solution, t=0.0):
@@ -178,6 +179,7 @@ class RodDynamics:
         static_w = solution.raw["w"]
         w = np.concatenate([static_w, np.zeros(self.solver.nlp.scale.size - static_w.size)])
         self.states = [StepState(t, self.solver.node_values(w), w, np.array(solution.parameters, float))]
+        self._midpoints = []
         return self.states[-1]
 
     def _coefficients(self, h):
@@ -222,6 +224,8 @@ class RodDynamics:
             return None, solution
         w = solution.raw["w"]
         if self.integrator == "midpoint":
+            middle = StepState(now.t + 0.5 * h, self.solver.node_values(w), w, solved_at)
+            self._midpoints = (self._midpoints + [middle])[-2:]
             w = 2.0 * w - now.w
         state = StepState(now.t + h, self.solver.node_values(w), w, params)
         self.states = (self.states + [state])[-2:]
@@ -234,6 +238,22 @@ class RodDynamics:
         last = state.nodes[tip][1][:, -(self.solver.degree + 1):]            # the last interval's nodes
         q_end = last @ nlp.scheme.D
         return rotation_numpy(ends[3:7, tip]) @ q_end[0:3]
+
+    def output_tip_velocity(self, state):
+        """The tip velocity [m/s] (3,) to report at ``state``: :meth:`tip_velocity`; for the
+        midpoint rule, extrapolated linearly to the state's time from the last two solved
+        midpoint states (from rest and the first one after the first step), whose velocities
+        are free of the period-2 oscillation that the extrapolated end states carry."""
+        if self.integrator != "midpoint" or not self._midpoints:
+            return self.tip_velocity(state)
+        last = self._midpoints[-1]
+        if len(self._midpoints) == 1:
+            before = self.states[-2] if len(self.states) > 1 else self.states[0]     # the start, at rest
+            before_velocity, before_time = self.tip_velocity(before), before.t
+        else:
+            before_velocity, before_time = self.tip_velocity(self._midpoints[0]), self._midpoints[0].t
+        velocity = self.tip_velocity(last)
+        return velocity + (velocity - before_velocity) * (state.t - last.t) / (last.t - before_time)
 
     def end_solution(self, state, previous, solved):
         """The :class:`Solution` of the end state of a midpoint step (extrapolated, not itself a

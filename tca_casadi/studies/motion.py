@@ -171,7 +171,7 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
         if config.integrator == "midpoint":
             solution = dynamics.end_solution(state, previous, solution)
         series.solutions.append(solution)
-        series.tip_velocities.append(dynamics.tip_velocity(state))
+        series.tip_velocities.append(dynamics.output_tip_velocity(state))
         account.add(previous, state, solution, previous_solution)
         if progress is not None:
             progress((k + 1) / len(path), f"t = {series.t[k]:.4g} s")

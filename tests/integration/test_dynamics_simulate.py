@@ -38,15 +38,17 @@ def test_release_files_and_energy_account(tmp_path, capsys):
     assert np.all(data["dissipated_energy_J"] == 0) and np.all(data["actuator_work_J"] == 0)
 
 
-def test_the_tip_velocity_is_the_rate_of_the_tip_position():
-    """BDF2: the tip velocity ``R q`` from the velocity states against central differences of
-    the tip positions (to 1.5 % of the peak speed at 2.5 ms steps; the first two steps, after
-    the release's jump in acceleration, aside)."""
-    series = TimeSimulation(Simulation.from_file(CANTILEVER, [RELEASE[0].replace("midpoint", "bdf2")] + RELEASE[1:]),
+@pytest.mark.parametrize("integrator, within", [("bdf2", 0.005), ("midpoint", 0.02)])
+def test_the_tip_velocity_is_the_rate_of_the_tip_position(integrator, within):
+    """The tip velocity ``R q`` from the velocity states against central differences of the tip
+    positions at 2.5 ms steps (the first two steps, after the release's jump in acceleration,
+    aside): BDF2 to 0.5 % of the peak speed (0.23 % measured), the midpoint rule's (extrapolated
+    from its solved midpoint states) to 2 % (1.5 %)."""
+    series = TimeSimulation(Simulation.from_file(CANTILEVER, [RELEASE[0].replace("midpoint", integrator)] + RELEASE[1:]),
                             dt=0.0025).run()
     t, x, v = series.t, series.tip_positions()[:, 0], series.tip_velocities[:, 0]
     rate = (x[2:] - x[:-2]) / (t[2:] - t[:-2])
-    assert_allclose(v[3:-1], rate[2:], rtol=0, atol=0.015 * np.max(np.abs(v)))
+    assert_allclose(v[3:-1], rate[2:], rtol=0, atol=within * np.max(np.abs(v)))
 
 
 def test_a_temperature_step_rings_at_the_first_mode_and_overshoots():
