@@ -172,6 +172,7 @@ class RodDynamics:
                         for module in sim.robot.modules]
         self.states = []                     # StepState s, the last two kept
         self._midpoints = []                 # the midpoint rule's solved states, the last two
+        self._history_w = []
         self._lu = None
 
     def start(self, solution, t=0.0):
@@ -180,6 +181,7 @@ class RodDynamics:
         w = np.concatenate([static_w, np.zeros(self.solver.nlp.scale.size - static_w.size)])
         self.states = [StepState(t, self.solver.node_values(w), w, np.array(solution.parameters, float))]
         self._midpoints = []
+        self._history_w = [(t, w)]               # (t, w) of the last three states, for the predictor
         return self.states[-1]
 
     def _coefficients(self, h):
@@ -212,11 +214,7 @@ class RodDynamics:
         params = np.asarray(params, float)
         solved_at = 0.5 * (params + now.params) if self.integrator == "midpoint" else params
         full = self.solver.parameters(solved_at, c0, self.damping, histories)
-        guess = now.w
-        if len(self.states) == 2:                    # extrapolated from the last two states
-            last = now.t - self.states[-2].t
-            reach = (0.5 * h if self.integrator == "midpoint" else h) / last
-            guess = now.w + (now.w - self.states[-2].w) * reach
+        guess = self._predicted(now.t + (0.5 * h if self.integrator == "midpoint" else h))
         solution = self.solver.solve_newton(full, guess, lu=self._lu)
         self._lu = self.solver.square.last_lu           # chord steps of the next step start on it
         self.last_status = solution.result
@@ -229,6 +227,7 @@ class RodDynamics:
             w = 2.0 * w - now.w
         state = StepState(now.t + h, self.solver.node_values(w), w, params)
         self.states = (self.states + [state])[-2:]
+        self._history_w = (self._history_w + [(state.t, w)])[-3:]
         return state, solution
 
     def tip_velocity(self, state):
@@ -238,6 +237,19 @@ class RodDynamics:
         last = state.nodes[tip][1][:, -(self.solver.degree + 1):]            # the last interval's nodes
         q_end = last @ nlp.scheme.D
         return rotation_numpy(ends[3:7, tip]) @ q_end[0:3]
+
+    def _predicted(self, t):
+        """Newton's start at time ``t``: the quadratic (Lagrange) extrapolation of the last
+        three states' variables (linear with two, the last with one)."""
+        known = self._history_w[-3:]
+        guess = np.zeros_like(known[-1][1])
+        for j, (t_j, w_j) in enumerate(known):
+            weight = 1.0
+            for k, (t_k, _) in enumerate(known):
+                if k != j:
+                    weight *= (t - t_k) / (t_j - t_k)
+            guess += weight * w_j
+        return guess
 
     def output_tip_velocity(self, state):
         """The tip velocity [m/s] (3,) to report at ``state``: :meth:`tip_velocity`; for the
