@@ -1,5 +1,5 @@
-"""tca_casadi: static shape of soft robots (Cosserat rods) driven by twisted-and-coiled actuators
-and tendons, by direct collocation in CasADi solved with IPOPT.
+"""tca_casadi: shape and motion of soft robots (Cosserat rods) driven by twisted-and-coiled
+actuators and tendons, by direct collocation in CasADi solved by Newton/IPOPT.
 
     import tca_casadi as tc
     sim = tc.Simulation.from_file("scenarios/bending_module.yaml")

@@ -32,8 +32,8 @@ def _output_arguments(parser, default, plots):
 def build_parser():
     parser = argparse.ArgumentParser(
         prog="tca-casadi",
-        description="Static shape of soft robots driven by TCAs and tendons (Cosserat rods, "
-                    "CasADi collocation + IPOPT).")
+        description="Shape and motion of soft robots driven by TCAs and tendons (Cosserat rods, "
+                    "CasADi collocation + Newton/IPOPT).")
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress to stderr")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
