@@ -116,7 +116,7 @@ def build_parser():
     simulate.add_argument("-o", "--output", type=Path, default=None,
                           help="output directory (default: results/<scenario name>/simulate)")
     simulate.add_argument("--duration", default=None, help="[s] (units allowed: '30 s'); default the scenario's")
-    simulate.add_argument("--dt", default="0.1", help="output step [s] (default 0.1)")
+    simulate.add_argument("--dt", default="0.1", help="output step [s] (default 0.1); with dynamics, the time step")
     simulate.add_argument("--no-plot", action="store_true", help="no timeseries.png")
     simulate.add_argument("--no-animation", action="store_true",
                           help="no simulate.gif / simulate.mp4 (the robot in time, with a clock)")
@@ -189,6 +189,14 @@ def _print_thermal(scenario, robot):
         resistance = "" if law.resistance != law.resistance else f", R0 {law.resistance:.4g} ohm"
         print(f"  {actuator.key:<28} C {law.heat_capacity:.4g} J/K, G {law.conductance:.4g} W/K, "
               f"tau {law.time_constant:.3g} s{resistance}")
+    if scenario.dynamics.enabled:
+        from .discretisation.dynamics import time_scale
+        damping = scenario.dynamics.damping
+        text = "undamped" if damping is None else (
+            f"eta {damping.viscosity:g} Pa s" if damping.viscosity is not None else
+            f"zeta {damping.ratio:g} at {damping.frequency:g} Hz")
+        scales = ", ".join(f"{m.name} {time_scale(m):.3g} s" for m in robot.modules if m.weight_density > 0)
+        print(f"dynamics ({scenario.dynamics.integrator}, {text}): time scale sqrt(rho A L^4 / EI): {scales}")
     for module in scenario.modules:
         if module.thermal_coupling is not None:
             names = [a.name for a in module.actuators if a.kind == "tca"]
