@@ -238,6 +238,14 @@ class RodDynamics:
         q_end = last @ nlp.scheme.D
         return rotation_numpy(ends[3:7, tip]) @ q_end[0:3]
 
+    def checkpoint(self):
+        """The stepper's history (states, predictor and midpoint memories), for :meth:`restore`."""
+        return list(self.states), list(self._history_w), list(self._midpoints)
+
+    def restore(self, checkpoint):
+        """Back to a :meth:`checkpoint` (after a step that is to be redone in substeps)."""
+        self.states, self._history_w, self._midpoints = (list(part) for part in checkpoint)
+
     def _predicted(self, t):
         """Newton's start at time ``t``: the quadratic (Lagrange) extrapolation of the last
         three states' variables (linear with two, the last with one)."""

@@ -187,15 +187,15 @@ def _advance(dynamics, start, end, h):
     step, or 2, 4, ... equal substeps (parameters linear in between) when Newton fails.
     ``(state, solution)``; ``state`` None if the last attempt failed."""
     start, end = np.asarray(start, float), np.asarray(end, float)
-    saved = list(dynamics.states)
+    saved = dynamics.checkpoint()
     for halving in range(HALVINGS + 1):
         count = 2 ** halving
-        dynamics.states = list(saved)
+        dynamics.restore(saved)
         for j in range(1, count + 1):
             state, solution = dynamics.step(start + (end - start) * j / count, h / count)
             if state is None:
                 break
         else:
             return state, solution
-    dynamics.states = saved
+    dynamics.restore(saved)
     return None, solution

@@ -114,3 +114,28 @@ def test_a_realistic_power_step_does_not_ring():
     assert moving.completed and still.completed
     assert_allclose(moving.tip_positions(), still.tip_positions(), rtol=0, atol=10e-6)
     assert np.max(np.linalg.norm(still.tip_positions() - still.tip_positions()[0], axis=1)) > 2.5e-3
+
+
+def test_a_step_that_fails_is_halved_and_a_run_that_cannot_go_on_says_why(monkeypatch):
+    """Steps longer than 4 ms made to fail: every 10 ms output is reached in four 2.5 ms steps
+    (halved twice), the same motion as 2.5 ms steps throughout; steps that always fail stop the
+    run at the first output with the reason."""
+    from tca_casadi.solvers.dynamics import RodDynamics
+    real = RodDynamics.step
+    taken = []
+
+    def fragile(self, params, h):
+        taken.append(h)
+        return (None, real(self, params, h)[1]) if h > 0.004 else real(self, params, h)
+
+    settings = [RELEASE[0].replace("midpoint", "bdf2"), "duration=0.05", RELEASE[2]]
+    monkeypatch.setattr(RodDynamics, "step", fragile)
+    halved = TimeSimulation(Simulation.from_file(CANTILEVER, settings), dt=0.01).run()
+    assert halved.completed and np.unique(np.round(taken, 12)).tolist() == [0.0025, 0.005, 0.01]
+    monkeypatch.setattr(RodDynamics, "step", real)
+    fine = TimeSimulation(Simulation.from_file(CANTILEVER, settings), dt=0.0025).run()
+    assert_allclose(halved.tip_positions(), fine.tip_positions()[::4], rtol=0, atol=1e-12)
+    monkeypatch.setattr(RodDynamics, "step", lambda self, params, h: (None, real(self, params, h)[1]))
+    stuck = TimeSimulation(Simulation.from_file(CANTILEVER, settings), dt=0.01).run()
+    assert not stuck.completed and len(stuck.solutions) == 1
+    assert "did not converge even halved 6 times" in stuck.message
