@@ -81,13 +81,20 @@ class EnergyAccount:
         rigid_kinetic, rigid_potential = self.dynamics.rigid_energies(state, solution, masses)
         return kinetic + rigid_kinetic, elastic, potential + rigid_potential
 
-    def add(self, previous, state, solution, previous_solution):
-        """Account for the step from ``previous`` to ``state`` (StepStates, with their Solutions)."""
+    def add(self, previous, state, solution, previous_solution, during=None):
+        """Account for the step from ``previous`` to ``state`` (StepStates, with their
+        Solutions). ``during``: the Solution the step was solved at (the midpoint rule's
+        midpoint state), whose tensions and loads then do the work over the whole step (the
+        rule's own discrete energy identity); else the trapezoidal rule on the two ends."""
         if previous is not None:
-            self._work["actuator_work"] -= sum(
-                0.5 * (a.tension + previous_solution.actuators[key].tension) * (a.length - previous_solution.actuators[key].length)
-                for key, a in solution.actuators.items())
-            self._work["load_work"] += _load_work(previous_solution, solution)
+            robot = self.dynamics.sim.robot
+            if during is None:
+                pulls = {k: 0.5 * (a.tension + previous_solution.actuators[k].tension) for k, a in solution.actuators.items()}
+            else:
+                pulls = {k: a.tension for k, a in during.actuators.items()}
+            self._work["actuator_work"] -= sum(pulls[k] * (a.length - previous_solution.actuators[k].length)
+                                               for k, a in solution.actuators.items())
+            self._work["load_work"] += _load_work(robot, previous_solution, solution, during)
             self._work["dissipated_energy"] += self._dissipated(previous, state)
         stored = self.stored(state, solution)
         if previous is not None:            # a point mass that changed (an object let go or taken) takes or brings its energy
@@ -111,25 +118,28 @@ class EnergyAccount:
         return total
 
 
-def _load_work(before, after):
-    """Work of the point loads between two solutions: trapezoidal force times displacement plus
-    moment times the rotation vector of the load point's frame change (small steps)."""
+def _load_work(robot, before, after, during=None):
+    """Work of the point loads between two solutions: force times displacement plus moment
+    times the rotation vector of the load point's frame change (small steps), the forces and
+    moments those of ``during`` if given, else the mean of the two ends."""
     work = 0.0
-    for a, b in zip(before.loads, after.loads):
-        if a["kind"] != "point":
+    for k, load in enumerate(robot.point_loads):
+        if load.kind != "point":
             continue
-        work += 0.5 * float((a["force"] + b["force"]) @ (b["position"] - a["position"]))
-        if np.any(a["moment"]) or np.any(b["moment"]):
-            work += 0.5 * float((a["moment"] + b["moment"]) @ _rotation_between(before, after, a))
+        a, b = before.loads[k], after.loads[k]
+        force, moment = ((during.loads[k]["force"], during.loads[k]["moment"]) if during is not None else
+                         (0.5 * (a["force"] + b["force"]), 0.5 * (a["moment"] + b["moment"])))
+        work += float(force @ (b["position"] - a["position"]))
+        if np.any(moment):
+            work += float(moment @ _rotation_between(before, after, load))
     return work
 
 
 def _rotation_between(before, after, load):
     """Rotation vector [rad] of the body frame at a point load from one solution to the next."""
     def frame(solution):
-        module = next(m for m in solution.modules if np.any(np.all(np.isclose(m.p.T, load["position"]), axis=1)))
-        k = int(np.argmin(np.linalg.norm(module.p.T - load["position"], axis=1)))
-        return module.R[:, :, k]
+        module = solution.modules[load.module]
+        return module.R[:, :, int(np.argmin(np.abs(module.s - load.s)))]
     change = frame(after) @ frame(before).T
     return 0.5 * np.array([change[2, 1] - change[1, 2], change[0, 2] - change[2, 0], change[1, 0] - change[0, 1]])
 
@@ -168,11 +178,12 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
             series.message = (f"stopped at t = {series.t[k]:g} s: the step from t = {series.t[k - 1]:g} s did not "
                               f"converge even halved {HALVINGS} times ({solution.message})")
             break
+        during = None
         if config.integrator == "midpoint":
-            solution = dynamics.end_solution(state, previous, solution)
+            during, solution = solution, dynamics.end_solution(state, previous, solution)
         series.solutions.append(solution)
         series.tip_velocities.append(dynamics.output_tip_velocity(state))
-        account.add(previous, state, solution, previous_solution)
+        account.add(previous, state, solution, previous_solution, during)
         if progress is not None:
             progress((k + 1) / len(path), f"t = {series.t[k]:.4g} s")
     series.tip_velocities = np.array(series.tip_velocities)
