@@ -33,6 +33,14 @@ def vector(*items):
     return np.array([float(item) for item in items])
 
 
+def cross(a, b):
+    """Cross product of 3-vectors, or column by column of (3, k) arrays; CasADi if either is
+    symbolic."""
+    if is_casadi(a) or is_casadi(b):
+        return _casadi().cross(a, b)
+    return np.cross(np.asarray(a, float), np.asarray(b, float), axis=0)
+
+
 def placement_matrix(radius, angle):
     """``radius Rz(angle)`` (3, 3): a route's unit data (radius 1, angle 0) placed on the body."""
     c, s = cos(angle), sin(angle)

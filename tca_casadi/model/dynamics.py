@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .arith import vector
+from .arith import cross, is_casadi, vector
 
 
 @dataclass(frozen=True)
@@ -68,11 +68,13 @@ def velocity_rates(u, v, q, w, u_t, v_t):
 def inertial_loads(q, w, q_t, w_t, mass, rotary):
     """Body-frame distributed force and moment of the section's inertia [N/m, N m/m]:
     ``-rho A (q_t + w x q)`` and ``-(rho J w_t + w x rho J w)`` (``mass`` = rho A, ``rotary`` =
-    the diagonal of rho J, (3,); q, w, q_t, w_t: (3, k) CasADi)."""
-    columns = w.shape[1]
-    rotary = (ca.DM(rotary) if isinstance(rotary, np.ndarray) else rotary) @ ca.DM.ones(1, columns)
+    the diagonal of rho J, (3,); q, w, q_t, w_t: (3, k), numpy or CasADi)."""
+    if is_casadi(w) or is_casadi(q) or is_casadi(mass) or is_casadi(rotary):
+        rotary = (ca.DM(rotary) if isinstance(rotary, np.ndarray) else rotary) @ ca.DM.ones(1, w.shape[1])
+    else:
+        rotary = np.asarray(rotary, float).reshape(3, 1)
     spin = rotary * w
-    return -mass * (q_t + ca.cross(w, q)), -(rotary * w_t + ca.cross(w, spin))
+    return -mass * (q_t + cross(w, q)), -(rotary * w_t + cross(w, spin))
 
 
 def point_mass_of(load, param):
@@ -86,17 +88,19 @@ def point_mass_of(load, param):
 
 
 def point_inertia(mass, q, w, q_t, w_t, offset=None):
-    """Body-frame wrench ``[moment; force]`` of a rigid point mass fixed in the section's frame
-    at ``offset`` (3,) from the centreline (None: on it): ``F = -mass a`` with the body-frame
-    acceleration ``a = q_t + w x q + w_t x c + w x (w x c)``, and ``c x F`` (its rotary inertia
-    about its own centre neglected). Numbers or CasADi symbols."""
-    acceleration = q_t + ca.cross(w, q)
-    if offset is not None:
-        c = ca.DM(offset)
-        acceleration = acceleration + ca.cross(w_t, c) + ca.cross(w, ca.cross(w, c))
-        force = -mass * acceleration
-        return ca.vertcat(ca.cross(c, force), force)
-    return ca.vertcat(ca.DM.zeros(3), -mass * acceleration)
+    """Body-frame wrench ``[moment; force]`` (6,) of a rigid point mass fixed in the section's
+    frame at ``offset`` (3,) from the centreline (None: on it): ``F = -mass a`` with the
+    body-frame acceleration ``a = q_t + w x q + w_t x c + w x (w x c)``, and ``c x F`` (its
+    rotary inertia about its own centre neglected). Numbers (numpy) or CasADi symbols."""
+    symbolic = any(is_casadi(v) for v in (mass, q, w, q_t, w_t))
+    stack = ca.vertcat if symbolic else (lambda a, b: np.concatenate([np.ravel(a), np.ravel(b)]))
+    acceleration = q_t + cross(w, q)
+    if offset is None:
+        return stack(ca.DM.zeros(3) if symbolic else np.zeros(3), -mass * acceleration)
+    c = ca.DM(offset) if symbolic else np.asarray(offset, float)
+    acceleration = acceleration + cross(w_t, c) + cross(w, cross(w, c))
+    force = -mass * acceleration
+    return stack(cross(c, force), force)
 
 
 def kinetic_energy_density(q, w, mass, rotary):

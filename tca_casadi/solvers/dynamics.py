@@ -17,21 +17,17 @@ the history from the previous steps' node values (step ``h``):
 The positions and orientations are not time-stepped: they follow, along s, from the base and
 the strains at each instant, as in the statics; the velocity compatibility makes ``p_t = R q``.
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..discretisation.dynamics import DynamicCollocationNLP
 from ..errors import ScenarioError
-from ..model.dynamics import elastic_energy_density, inertia_per_length, kinetic_energy_density
+from ..model.dynamics import (elastic_energy_density, inertia_per_length, inertial_loads, kinetic_energy_density,
+                              point_inertia, point_mass_of)
 from ..model.rotations import rotation_numpy, rotations_of
 from .collocation import CollocationSolver
 
-
-def ca_dm(value):
-    """A numpy vector as a CasADi DM column (for the model's CasADi-or-number functions)."""
-    import casadi as ca
-    return ca.DM(np.asarray(value, float))
 
 INTEGRATORS = ("bdf2", "midpoint", "bdf1")
 
@@ -73,9 +69,7 @@ class DynamicSolver(CollocationSolver):
             history = params[nlp.history_index[m]].T                     # (12, nodes)
             rates = c0 * velocity + history[6:12]
             mass, rotary = inertia_per_length(self.robot.modules[m], param)
-            q, w_, q_t, w_t = velocity[0:3], velocity[3:6], rates[0:3], rates[3:6]
-            force = -mass * (q_t + np.cross(w_, q, axis=0))
-            moment = -(rotary[:, None] * w_t + np.cross(w_, rotary[:, None] * w_, axis=0))
+            force, moment = inertial_loads(velocity[0:3], velocity[3:6], rates[0:3], rates[3:6], mass, rotary)
             R = rotations_of(states[3:7, :-1])                                # nodes without the tip
             weight = weights[:-1]
             points.append(states[0:3, :-1])
@@ -93,7 +87,6 @@ class DynamicSolver(CollocationSolver):
         position (3,), R (3, 3))`` in the frame of the section they ride on; ``frame(m,
         column)`` gives ``(p, R)`` of module m at a node column (-1: its tip)."""
         nlp, robot, d = self.nlp, self.robot, self.degree
-        from ..model.dynamics import point_mass_of
         c0 = params[nlp.c0_index]
         param = robot.param_function(params[:robot.layout.size])
         nodes = self.node_values(w)
@@ -125,15 +118,13 @@ class DynamicSolver(CollocationSolver):
     def _rigid_inertias(self, w, params, module_data):
         """``(point, force, moment)`` (3,) each, global: the inertial loads of :meth:`rigid_points`
         (:func:`~tca_casadi.model.dynamics.point_inertia`, rotated to the global frame)."""
-        from ..model.dynamics import point_inertia
-
         def frame(m, column):
             states = module_data[m][1]
             return states[0:3, column], rotation_numpy(states[3:7, column])
 
         out = []
         for mass, offset, kinematics, position, R in self.rigid_points(w, params, frame):
-            wrench = np.array(point_inertia(mass, *(ca_dm(v) for v in kinematics), offset=offset)).ravel()
+            wrench = point_inertia(mass, *kinematics, offset=offset)
             point = position if offset is None else position + R @ offset
             out.append((point, R @ wrench[3:6], np.zeros(3)))
         return out
@@ -280,7 +271,6 @@ class RodDynamics:
         solution of the step's equations), with the step's status and the global balance of the
         solved midpoint state ``solved`` (an extrapolated state has no consistent acceleration
         to balance)."""
-        from dataclasses import replace
         h = state.t - previous.t
         histories = [-np.vstack(nodes) / h for nodes in previous.nodes]
         full = self.solver.parameters(state.params, 1.0 / h, self.damping, histories)
@@ -317,8 +307,9 @@ class RodDynamics:
         """``(kinetic, elastic)`` [J] of the rods at ``state`` (Gauss quadrature on the nodes)."""
         param = self.sim.robot.param_function(params)
         kinetic = elastic = 0.0
+        evaluated = self.sim.robot.at(params)
         for m, (deviation, velocity) in enumerate(state.nodes):
-            module = self.sim.robot.at(params).modules[m]
+            module = evaluated.modules[m]
             weights = self.solver.nlp.node_weights(m)[:-1]
             mass, rotary = inertia_per_length(self.sim.robot.modules[m], param)
             kinetic += float(kinetic_energy_density(velocity[0:3], velocity[3:6], mass, rotary) @ weights)

@@ -226,8 +226,7 @@ class TimeSimulation:
         series.history = history
         if self.sim.scenario.dynamics.enabled:
             from .motion import follow_dynamics
-            initial = path[0].copy()                    # at rest before any event at t = 0
-            initial[:] = self.parameters_at(times[0], left=True)
+            initial = self.parameters_at(times[0], left=True)       # at rest before any event at t = 0
             for j, actuator in enumerate(self.heated):
                 initial[layout[actuator.parameter]] = history.temperature[0, j]
             follow_dynamics(self.sim, series, path, progress, initial)
