@@ -210,13 +210,14 @@ DYNAMIC_PROBLEMS = {"bending module": ("bending_module", ["bending.tca2.temperat
                     "arm": ("arm", ["finger_a.connector.mass=0"])}
 
 
-def dynamics_rate(name, dt, steps):
+def dynamics_rate(name, dt, steps, jit=False):
     """Real-time factor (simulated seconds per wall second) of BDF2 dynamics: the median step time
-    over ``steps`` steps of ``dt`` after a TCA's temperature steps by 10 degC (the static start
-    and the dynamic NLP's build not timed)."""
+    (Newton and the step's Solution with its global balance) over ``steps`` steps of ``dt`` after
+    a TCA's temperature steps by 10 degC (the static start, the dynamic NLP's build and any
+    compile not timed); ``jit``: with ``solver.jit``."""
     from tca_casadi.solvers.dynamics import RodDynamics
     scenario, overrides = DYNAMIC_PROBLEMS[name]
-    sim = Simulation.from_file(SCENARIOS / f"{scenario}.yaml", overrides)
+    sim = Simulation.from_file(SCENARIOS / f"{scenario}.yaml", overrides + [f"solver.jit={str(jit).lower()}"])
     static = sim.solve(warn=False)
     dynamics = RodDynamics(sim, "bdf2")
     state = dynamics.start(static)
@@ -224,15 +225,17 @@ def dynamics_rate(name, dt, steps):
     key = sim.robot.tcas[0].parameter
     params[sim.robot.layout[key]] += 10.0
     state.params = params
-    times = []
+    times, iterations = [], []
     for _ in range(steps):
         started = time.perf_counter()
         state, solution = dynamics.step(params, dt)
         times.append(time.perf_counter() - started)
+        iterations.append(solution.result.nit)
         if state is None:
             return {"dt_s": dt, "step_s": None, "real_time_factor": None, "message": solution.message}
     step = float(np.median(times))
-    return {"dt_s": dt, "step_s": step, "real_time_factor": dt / step, "unknowns": int(dynamics.solver.nlp.scale.size)}
+    return {"dt_s": dt, "jit": jit, "step_s": step, "real_time_factor": dt / step,
+            "newton_iterations": float(np.median(iterations)), "unknowns": int(dynamics.solver.nlp.scale.size)}
 
 
 def check_times(names):
@@ -312,8 +315,8 @@ def main(argv=None):
     cycle = simulate_cycle(1.0 if args.quick else 0.1, 1 if args.quick else 5)
     if not args.quick:                     # the compiled residual (its one-time compile not timed)
         cycle.update(simulate_cycle(0.1, 5, jit=True))
-    motion = {name: [dynamics_rate(name, dt, 5 if args.quick else 50) for dt in (0.002, 0.01)]
-              for name in (["bending module"] if args.quick else list(DYNAMIC_PROBLEMS))}
+    motion = {name: [dynamics_rate(name, dt, 5 if args.quick else 50, jit) for jit in ((False,) if args.quick else (False, True))
+                     for dt in (0.002, 0.01)] for name in (["bending module"] if args.quick else list(DYNAMIC_PROBLEMS))}
     checks = check_times(["bending_module"] if args.quick else
                          ["bending_module", "twisting_module", "tendon_robot", "tendon_robot_two_segments",
                           "arm", "arm_pick_and_place", "analytic/pure_moment", "analytic/tip_load",
@@ -330,7 +333,8 @@ def main(argv=None):
               if "simulate_jit_s" in cycle else ""))
     for name, runs in motion.items():
         print(f"dynamics (BDF2) {name}: " + ", ".join(
-            f"dt {r['dt_s'] * 1e3:g} ms: {r['step_s'] * 1e3:.2f} ms per step, {r['real_time_factor']:.2f}x real time"
+            f"dt {r['dt_s'] * 1e3:g} ms{' jit' if r['jit'] else ''}: {r['step_s'] * 1e3:.2f} ms per step "
+            f"({r['newton_iterations']:g} Newton iterations), {r['real_time_factor']:.2f}x real time"
             if r["step_s"] else f"dt {r['dt_s'] * 1e3:g} ms: failed ({r['message']})" for r in runs))
     print(f"measured {machine['date']} on {machine['cpus']} CPUs, Python {machine['python']}")
     args.output.parent.mkdir(parents=True, exist_ok=True)

@@ -38,7 +38,8 @@ def cross(a, b):
     symbolic."""
     if is_casadi(a) or is_casadi(b):
         return _casadi().cross(a, b)
-    return np.cross(np.asarray(a, float), np.asarray(b, float), axis=0)
+    a, b = np.asarray(a, float), np.asarray(b, float)        # row by row: np.cross's axis shuffling costs more
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 def placement_matrix(radius, angle):

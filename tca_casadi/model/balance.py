@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .arith import cross
+
 @dataclass
 class GlobalBalance:
     """Residual force [N] and moment about the base point [N m] of the whole robot, and the
@@ -59,13 +61,13 @@ def global_balance(robot, modules, params, tensions, extra_loads=None):
         if hanger is not None:           # a decoupled subtree: its net force at its attachment
             points = modules[robot.modules[hanger].parent].p[:, -1:]
             forces, moments = forces.sum(axis=1, keepdims=True), np.zeros((3, 1))
-        arms = _cross_columns(points - base[:, None], forces)
+        arms = cross(points - base[:, None], forces)
         force, moment = force + forces.sum(axis=1), moment + arms.sum(axis=1) + moments.sum(axis=1)
         force_scale += float(np.linalg.norm(forces, axis=0).sum())
         moment_scale += float(np.linalg.norm(arms, axis=0).sum() + np.linalg.norm(moments, axis=0).sum())
     if extra_loads is not None:
         points, forces, moments = extra_loads
-        arms = _cross_columns(points - base[:, None], forces)
+        arms = cross(points - base[:, None], forces)
         force, moment = force + forces.sum(axis=1), moment + arms.sum(axis=1) + moments.sum(axis=1)
         force_scale += float(np.linalg.norm(forces, axis=0).sum())
         moment_scale += float(np.linalg.norm(arms, axis=0).sum() + np.linalg.norm(moments, axis=0).sum())
@@ -88,12 +90,6 @@ def _module_loads(robot, m, result, modules, value):
         if load.module == m:
             loads.append(_distributed_load(load, result, value))
     return tuple(np.hstack(parts) for parts in zip(*loads))
-
-
-def _cross_columns(a, b):
-    """Column-wise cross products of (3, k) arrays (``np.cross(a, b, axis=0)``, without its
-    axis shuffling)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 def _columns(*vectors):

@@ -6,23 +6,25 @@ Jacobian's determinant and its smallest singular value, which show folds).
 """
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import connected_components
 
 
 class Linearisation:
     """``g``, ``J_w = dg/dw`` (sparse, square), ``J_P = dg/dP`` and ``T_w, T_P``: the derivatives
-    of the tip position [m] at one point ``(w, P)``."""
+    of the tip position [m] at one point ``(w, P)``; ``factorise(J_w)``: the system's sparse LU
+    (an :class:`~tca_casadi.solvers.newton.OrderedLU`; default in J_w's own column order)."""
 
-    def __init__(self, g, J_w, J_P, T_w, T_P):
+    def __init__(self, g, J_w, J_P, T_w, T_P, factorise=None):
         self.g, self.J_w, self.J_P, self.T_w, self.T_P = g, J_w.tocsc(), J_P.tocsc(), T_w, T_P
+        self._factorise = factorise
         self._lu = None
 
     @property
     def lu(self):
-        """Sparse LU of ``J_w`` (SuperLU), computed once."""
+        """Sparse LU of ``J_w`` (an OrderedLU), computed once."""
         if self._lu is None:
-            self._lu = spla.splu(self.J_w, permc_spec="NATURAL")
+            from .newton import OrderedLU
+            self._lu = (self._factorise or OrderedLU)(self.J_w)
         return self._lu
 
     def state_derivative(self, direction):
@@ -39,12 +41,13 @@ class Linearisation:
         """Sign (+1, -1; 0 if singular) of ``det J_w``: a change between two points of a branch
         means a fold or a bifurcation lies between them. Computed once."""
         if getattr(self, "_sign", None) is None:
-            diagonal = self.lu.U.diagonal()
+            factors, order = self.lu.factors, self.lu.order
+            diagonal = factors.U.diagonal()
             if np.any(diagonal == 0):
                 self._sign = 0
-            else:
-                sign = np.prod(np.sign(diagonal))
-                self._sign = int(sign * _parity(self.lu.perm_r) * _parity(self.lu.perm_c))
+            else:                            # det J[:, order] = det J sign(order)
+                sign = np.prod(np.sign(diagonal)) * (1 if order is None else _parity(order))
+                self._sign = int(sign * _parity(factors.perm_r) * _parity(factors.perm_c))
         return self._sign
 
     def smallest_singular_value(self, iterations=6, seed=0):

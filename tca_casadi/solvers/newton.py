@@ -3,8 +3,10 @@
 The residual and its exact sparse Jacobian come from the Function IPOPT already uses
 (``nlp_jac_g``), evaluated into preallocated numpy buffers (CasADi's buffer API), so nothing is
 rebuilt and no CasADi matrix is converted at solve time. The Jacobian is factorised by SuperLU
-with the natural column order (the collocation Jacobian is block-banded: that order makes less
-work than COLAMD here; row pivoting keeps it stable).
+(row pivoting keeps it stable) in one column order per structure (:class:`OrderedLU`): the
+natural one (one module's collocation Jacobian is block-banded, and COLAMD's ordering costs
+more than it saves there) unless COLAMD's fill is less than half of it (a tree of modules: the
+arm's factors are 7x smaller, its factorisation 12x and its triangular solves 4x faster).
 """
 import time
 
@@ -19,6 +21,45 @@ from .linearisation import Linearisation
 
 #: a chord step (the factorised Jacobian of an earlier point) is kept if it cuts |g|_2 this much
 CHORD_CONTRACTION = 0.1
+#: COLAMD's column order is used when its LU fill is below this fraction of the natural order's
+COLAMD_FILL = 0.5
+
+
+class OrderedLU:
+    """SuperLU factors of ``J[:, order]`` (natural order on the reordered columns; ``order`` None:
+    J's own), solving in J's coordinates: ``solve(b)`` gives ``x`` with ``J x = b`` (``b``: (n,)
+    or (n, k)), ``trans="T"`` with ``J^T x = b``."""
+
+    def __init__(self, J, order=None):
+        self.order = order
+        self.factors = spla.splu(J if order is None else J[:, order].tocsc(), permc_spec="NATURAL")
+
+    def solve(self, b, trans="N"):
+        if self.order is None:
+            return self.factors.solve(b, trans=trans)
+        if trans == "T":                     # (J Q)^T y = Q^T b: the rows of b in the new order
+            return self.factors.solve(np.ascontiguousarray(b[self.order]), trans="T")
+        permuted = self.factors.solve(b)
+        x = np.empty_like(permuted)
+        x[self.order] = permuted
+        return x
+
+    @property
+    def fill(self):
+        """Nonzeros of the factors L and U."""
+        return self.factors.L.nnz + self.factors.U.nnz
+
+
+def column_order(J):
+    """The column order :class:`OrderedLU` uses for Jacobians with ``J``'s pattern: None (natural)
+    or COLAMD's permutation when that roughly halves the fill (:data:`COLAMD_FILL`)."""
+    natural = OrderedLU(J)
+    colamd = spla.splu(J, permc_spec="COLAMD")
+    if colamd.L.nnz + colamd.U.nnz >= COLAMD_FILL * natural.fill:
+        return None
+    order = np.empty_like(colamd.perm_c)
+    order[colamd.perm_c] = np.arange(colamd.perm_c.size)
+    return order
 
 
 class BufferedFunction:
@@ -53,12 +94,21 @@ class SquareSystem:
         self._jacobian_pattern = CscPattern(jacobian.sparsity_out(1))
         self.shape = self._jacobian_pattern.shape
         self._sensitivity = None
+        self._order = None
         self.last_lu = None
 
     def evaluate(self, w, P):
         """``(g, J_w)``: copies of the residual (n,) and the Jacobian (CSC)."""
         g, J = self._with_jacobian(w, P)
         return g.copy(), self._jacobian_pattern.matrix(J)
+
+    def factorise(self, J):
+        """:class:`OrderedLU` of a Jacobian ``J`` (CSC) of this system, in the column order chosen
+        (:func:`column_order`) at the first one."""
+        if self._order is None:
+            order = column_order(J)
+            self._order = (order,)
+        return OrderedLU(J, self._order[0])
 
     def residual(self, w, P):
         """A copy of ``g(w, P)`` (n,)."""
@@ -92,12 +142,13 @@ class SquareSystem:
             if lu is not None and not fresh:
                 trial = w - lu.solve(g)
                 g_trial = self.residual(trial, P)
-                if np.all(np.isfinite(g_trial)) and np.linalg.norm(g_trial) <= CHORD_CONTRACTION * np.linalg.norm(g):
+                squared = float(g_trial @ g_trial)         # not finite if any entry is not
+                if squared <= CHORD_CONTRACTION ** 2 * float(g @ g):
                     w, g = trial, g_trial
                     continue
             try:
                 _, J = self.evaluate(w, P)
-                lu, fresh = spla.splu(J, permc_spec="NATURAL"), True
+                lu, fresh = self.factorise(J), True
             except RuntimeError:
                 return ended(iteration, Status.SINGULAR)
             w, g, accepted = self._line_search(w, g, lu.solve(g), P)
@@ -140,7 +191,7 @@ class SquareSystem:
         """:class:`Linearisation` at ``(w, P)``: adds ``dg/dP`` and the tip's derivatives."""
         g, J_w = self.evaluate(w, P)
         J_P, T_w, T_P = self._sensitivities(w, P)
-        return Linearisation(g, J_w, J_P, T_w, T_P.toarray())
+        return Linearisation(g, J_w, J_P, T_w, T_P.toarray(), factorise=self.factorise)
 
 
 class CscPattern:
