@@ -238,6 +238,30 @@ def dynamics_rate(name, dt, steps, jit=False):
             "newton_iterations": float(np.median(iterations)), "unknowns": int(dynamics.solver.nlp.scale.size)}
 
 
+def study_rates(per_axis, design_per_length):
+    """Samples per second of ``tca-casadi study`` on the bending module: the temperature box of
+    its three TCAs (``per_axis``^3 grid samples, 25-125 degC) serially and on a pool of 2
+    processes (their start-up, the NLP builds and the nominal solve included: the wall time of
+    ``Study.run``), and a design study with rebuilt geometry (5 module lengths x
+    ``design_per_length`` temperatures, one NLP build per length)."""
+    from tca_casadi.studies.study import Study
+    vary = {f"bending.tca{k}.temperature": [25, 125, per_axis] for k in (1, 2, 3)}
+    out = {"samples": per_axis ** 3}
+    for label, workers in (("serial", None), ("processes_2", 2)):
+        sim = Simulation.from_file(SCENARIOS / "bending_module.yaml")
+        result = Study(sim, vary=vary).run(workers=workers)
+        out[f"{label}_samples_per_s"] = result.info["samples_per_second"]
+        out[f"{label}_wall_s"] = result.info["wall_time_s"]
+        out[f"{label}_converged"] = int(result.info["converged"])
+    out["parallel_efficiency"] = out["processes_2_samples_per_s"] / (2 * out["serial_samples_per_s"])
+    sim = Simulation.from_file(SCENARIOS / "bending_module.yaml")
+    design = Study(sim, vary={"bending.length": {"values": [f"{v} mm" for v in (35, 40, 45, 50, 55)]},
+                              "bending.tca2.temperature": [25, 125, design_per_length]}).run()
+    out.update({"design_samples": int(design.info["samples"]), "design_samples_per_s": design.info["samples_per_second"],
+                "design_converged": int(design.info["converged"])})
+    return out
+
+
 def check_times(names):
     """``tca-casadi check`` on shipped scenarios: collocation and shooting seconds, agreement."""
     from tca_casadi.studies import check
@@ -317,6 +341,7 @@ def main(argv=None):
         cycle.update(simulate_cycle(0.1, 5, jit=True))
     motion = {name: [dynamics_rate(name, dt, 5 if args.quick else 50, jit) for jit in ((False,) if args.quick else (False, True))
                      for dt in (0.002, 0.01)] for name in (["bending module"] if args.quick else list(DYNAMIC_PROBLEMS))}
+    studies = study_rates(4, 4) if args.quick else study_rates(22, 20)
     checks = check_times(["bending_module"] if args.quick else
                          ["bending_module", "twisting_module", "tendon_robot", "tendon_robot_two_segments",
                           "arm", "arm_pick_and_place", "analytic/pure_moment", "analytic/tip_load",
@@ -336,10 +361,14 @@ def main(argv=None):
             f"dt {r['dt_s'] * 1e3:g} ms{' jit' if r['jit'] else ''}: {r['step_s'] * 1e3:.2f} ms per step "
             f"({r['newton_iterations']:g} Newton iterations), {r['real_time_factor']:.2f}x real time"
             if r["step_s"] else f"dt {r['dt_s'] * 1e3:g} ms: failed ({r['message']})" for r in runs))
+    print(f"study: bending module temperature box, {studies['samples']} samples: serial "
+          f"{studies['serial_samples_per_s']:.0f} samples/s, 2 processes {studies['processes_2_samples_per_s']:.0f} "
+          f"samples/s (parallel efficiency {studies['parallel_efficiency']:.0%}); design study with rebuilt geometry "
+          f"({studies['design_samples']} samples, 5 structures) {studies['design_samples_per_s']:.1f} samples/s")
     print(f"measured {machine['date']} on {machine['cpus']} CPUs, Python {machine['python']}")
     args.output.parent.mkdir(parents=True, exist_ok=True)
     args.output.write_text(json.dumps({"quick": args.quick, "machine": machine, "startup": started, "simulate": cycle,
-                                       "dynamics": motion,
+                                       "dynamics": motion, "study": studies,
                                        "check": checks, "rows": rows}, indent=2))
     print(f"wrote {args.output}")
     return rows

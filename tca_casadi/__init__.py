@@ -19,7 +19,8 @@ _LAZY = {"Simulation": ".simulation", "solve": ".simulation", "Solution": ".solu
          "Sweep": ".studies", "SweepResult": ".studies", "InverseStatics": ".studies",
          "InverseResult": ".studies", "Target": ".studies", "Scenario": ".scenario",
          "load_scenario": ".scenario", "Robot": ".model", "TcaLaw": ".model",
-         "TimeSimulation": ".studies.timeline", "simulate": ".studies.timeline"}
+         "TimeSimulation": ".studies.timeline", "simulate": ".studies.timeline",
+         "Study": ".studies.study", "StudyResult": ".studies.study_result"}
 
 __all__ = list(_LAZY) + ["ScenarioError", "SolverError", "ModelError", "OutputError", "TcaError",
                          "PhysicsWarning"]

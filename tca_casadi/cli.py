@@ -1,8 +1,9 @@
-"""Command line: ``tca-casadi validate|solve|check|sweep|inverse|sequence|simulate SCENARIO ...``.
+"""Command line: ``tca-casadi validate|solve|check|sweep|inverse|sequence|simulate|study SCENARIO ...``.
 
 Exit codes: 0 success, 1 the solver did not converge (``check``: the solvers disagree),
 2 bad input (one line on stderr). ``sweep``: 1 when the run stopped before the stop value;
-``inverse``: 1 when a target is unreachable (the closest pose is still written).
+``inverse``: 1 when a target is unreachable (the closest pose is still written); ``study``: 1
+when some samples did not converge (they are rows with their reason).
 """
 import argparse
 import json
@@ -121,6 +122,32 @@ def build_parser():
     simulate.add_argument("--no-animation", action="store_true",
                           help="no simulate.gif / simulate.mp4 (the robot in time, with a clock)")
     simulate.add_argument("--quiet", action="store_true", help="no progress bar")
+
+    study = commands.add_parser("study", help="solve many samples (workspace maps, Monte Carlo, design sweeps) "
+                                "serially, on local processes or a Dask cluster; study.parquet, study.csv, plots")
+    _scenario_arguments(study)
+    study.add_argument("--vary", action="append", default=[], metavar="PATH=LO:HI[:N]",
+                       help="a range of a scenario path (N values on a grid; units allowed: 25degC:125degC:11)")
+    study.add_argument("--monte-carlo", action="append", default=[], metavar="PATH=normal:MEAN:STD",
+                       help="a distribution of a path: normal:MEAN:STD or uniform:LO:HI")
+    study.add_argument("--rows", type=Path, default=None, metavar="CSV",
+                       help="explicit samples: a CSV whose columns are scenario paths (instead of --vary)")
+    study.add_argument("--design", choices=["grid", "sobol", "latin", "random"], default=None,
+                       help="how ranges are sampled (default grid; random with --monte-carlo)")
+    study.add_argument("--samples", type=int, default=None, help="points of a sobol/latin/random design (default 256)")
+    study.add_argument("--seed", type=int, default=0, help="seed of sobol, latin and random designs (default 0)")
+    study.add_argument("--outputs", nargs="+", default=[], metavar="NAME",
+                       help="further columns: MODULE.tip_x|tip_y|tip_z, ACTUATOR.length|free_stroke|slack_length, "
+                            "max_residual")
+    where = study.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None, metavar="K", help="a pool of K local processes")
+    where.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="a Dask scheduler (tcp://host:8786; default $DASK_SCHEDULER_ADDRESS if set)")
+    study.add_argument("--resume", action="store_true",
+                       help="continue an interrupted study in the same output directory")
+    study.add_argument("--color", default=None, metavar="COLUMN",
+                       help="the column that colours the workspace plot (default the first input)")
+    _output_arguments(study, "study", "the study PNGs")
     return parser
 
 
@@ -139,6 +166,10 @@ def main(argv=None):
     except TcaError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
+    except BrokenPipeError:            # the reader left (``| head``): not an error of ours
+        import os
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except KeyboardInterrupt:
         print("interrupted (files already written are complete)", file=sys.stderr)
         if argv is None:
@@ -384,8 +415,57 @@ def _simulate(args):
     return 0 if series.completed else 1
 
 
+def _study(args):
+    from .simulation import Simulation
+    from .studies.study import Study
+    sim = Simulation.from_file(Path(args.scenario), args.overrides)
+    vary = dict(_vary_spec(text, "--vary") for text in args.vary)
+    for text in args.monte_carlo:
+        path, spec = _vary_spec(text, "--monte-carlo")
+        if path in vary:
+            raise ScenarioError(f"--monte-carlo {path}: already varied by --vary")
+        vary[path] = spec
+    study = Study(sim, vary=vary, outputs=args.outputs, design=args.design, samples=args.samples,
+                  seed=args.seed, rows=args.rows)
+    plots = ["study_workspace.png", "study_monte_carlo.png", "study_response.png"]
+    output = prepare_directory(args.output or default_directory(sim.scenario.name, "study"),
+                               ["study.parquet", "study.csv", "study.json"] + plots, stale=plots)
+    result = _with_progress(lambda progress: study.run(workers=args.workers, scheduler=args.scheduler,
+                                                       progress=progress, directory=output, resume=args.resume),
+                            "study", quiet=args.quiet)
+    written = result.save(output, plots=not args.no_plot, color=args.color)
+    print(result.summary())
+    print("wrote " + ", ".join(str(p) for p in written))
+    return 0 if result.info["failed"] == 0 else 1
+
+
+def _vary_spec(text, option):
+    """``(path, spec)`` of ``PATH=LO:HI[:N]`` (--vary) or ``PATH=normal:MEAN:STD`` /
+    ``PATH=uniform:LO:HI`` (--monte-carlo)."""
+    path, sep, rest = text.partition("=")
+    parts = rest.split(":")
+    if not sep or not path.strip():
+        raise ScenarioError(f"{option} {text!r}: give PATH=" + ("LO:HI[:N]" if option == "--vary" else "normal:MEAN:STD"))
+    path = path.strip()
+    if option == "--vary":
+        if len(parts) not in (2, 3) or not all(p.strip() for p in parts):
+            raise ScenarioError(f"--vary {text!r}: give PATH=LO:HI or PATH=LO:HI:N")
+        spec = {"range": [_number(parts[0]), _number(parts[1])]}
+        if len(parts) == 3:
+            try:
+                spec["points"] = int(parts[2])
+            except ValueError:
+                raise ScenarioError(f"--vary {text!r}: N = {parts[2]!r} is not a whole number") from None
+        return path, spec
+    if len(parts) != 3 or parts[0] not in ("normal", "uniform"):
+        raise ScenarioError(f"--monte-carlo {text!r}: give PATH=normal:MEAN:STD or PATH=uniform:LO:HI")
+    if parts[0] == "normal":
+        return path, {"normal": {"mean": _number(parts[1]), "std": _number(parts[2])}}
+    return path, {"uniform": [_number(parts[1]), _number(parts[2])]}
+
+
 COMMANDS = {"validate": _validate, "solve": _solve, "check": _check, "sweep": _sweep,
-            "inverse": _inverse, "sequence": _sequence, "simulate": _simulate}
+            "inverse": _inverse, "sequence": _sequence, "simulate": _simulate, "study": _study}
 
 if __name__ == "__main__":
     sys.exit(main())

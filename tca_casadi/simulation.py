@@ -78,6 +78,12 @@ class Simulation:
         value = self.params[self.robot.layout[name]]
         return float(value[0]) if value.size == 1 else value.copy()
 
+    def use_meshes(self, meshes, degree=None):
+        """Solve by collocation on ``meshes`` (per module, e.g. another process's refined mesh)
+        at ``degree`` (default the scenario's): the same NLP wherever it is built."""
+        self._solvers["collocation"] = CollocationSolver.shared(
+            self.robot, self.scenario.solver, self.robot.structure_key(self.scenario), meshes, degree)
+
     # ------------------------------------------------------------------ solving
     def solver(self, method=None):
         """The solver for ``method`` (built on first use, then reused)."""
@@ -127,6 +133,25 @@ class Simulation:
         if warn:
             for warning in solution.warnings:
                 warnings.warn(warning, stacklevel=2)
+        return solution
+
+    def solve_near(self, previous=None):
+        """The equilibrium at the current parameters, for one of many nearby points (a study):
+        Newton from ``previous`` (the Solution at a nearby point; the solver's own warm start
+        without a square system), continuation from the reference state when there is none,
+        or when Newton fails or leaves a TCA pushing. Newton's first steps are chord steps on
+        the Jacobian factorised last (at or near ``previous``). No error estimate, no
+        refinement, no warnings issued (they are in ``solution.warnings``)."""
+        solver = self.solver()
+        solution = None
+        if previous is not None:
+            solution = (solver.solve_newton(self.params, solver.initial_guess(self.params, previous),
+                                            lu=solver.square.last_lu)
+                        if solver.has_square_system else solver.solve(self.params, previous))
+        if solution is None or _needs_continuation(solution):
+            cold = self.continue_from_rest(solver)
+            solution = cold if solution is None else _better(solution, cold)
+        self.last = solution
         return solution
 
     def solve_at(self, params, method=None):

@@ -1,0 +1,90 @@
+"""A study on a local pool of processes and on a real Dask cluster (a scheduler and two worker
+processes on 127.0.0.1, started here): the same rows as in one process, and a worker killed in
+the middle of the study does not lose a sample."""
+import multiprocessing
+import os
+import signal
+import threading
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+import tca_casadi as tc
+from tca_casadi.studies.study import Study
+
+distributed = pytest.importorskip("distributed")
+
+TEMPERATURES = ["bending.tca1.temperature", "bending.tca2.temperature", "bending.tca3.temperature"]
+TIP = ["tip_x [m]", "tip_y [m]", "tip_z [m]"]
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """A LocalCluster: its own scheduler and two single-threaded worker processes on 127.0.0.1."""
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None, scheduler_port=0) as local:
+        with distributed.Client(local) as client:
+            client.wait_for_workers(2, timeout=60)
+            yield local
+
+
+def _study(scenarios, samples=40):
+    sim = tc.Simulation.from_file(scenarios / "bending_module.yaml")
+    return Study(sim, vary={p: [25, 125] for p in TEMPERATURES}, design="sobol", samples=samples, seed=5)
+
+
+def test_serial_processes_and_dask_give_the_same_rows(scenarios, cluster):
+    serial = _study(scenarios).run()
+    pooled = _study(scenarios).run(workers=2)
+    on_dask = _study(scenarios).run(scheduler=cluster.scheduler_address)
+    for other in (pooled, on_dask):
+        assert len(other.frame) == 40 and other.frame["converged"].all()
+        assert_allclose(other.frame[TIP].to_numpy(float), serial.frame[TIP].to_numpy(float), rtol=0, atol=1e-9)
+        tensions = [c for c in serial.frame.columns if c.endswith(".tension [N]")]
+        assert_allclose(other.frame[tensions].to_numpy(float), serial.frame[tensions].to_numpy(float),
+                        rtol=1e-8, atol=1e-13)
+    assert pooled.info["ran_on"] == "processes: 2" and pooled.frame["worker"].nunique() == 2
+    assert on_dask.info["ran_on"].startswith("dask: tcp://127.0.0.1:") and on_dask.info["workers"] == 2
+    assert on_dask.frame["worker"].nunique() == 2
+
+
+def _kill_one_when_started(kill, started):
+    """``progress`` that kills a worker (``kill()``) once the first chunk is back."""
+    def progress(fraction, text):
+        if not started.is_set():
+            started.set()
+            kill()
+    return progress
+
+
+def test_a_killed_dask_worker_loses_no_sample(scenarios, cluster):
+    client = distributed.Client(cluster.scheduler_address)
+    try:
+        pids = list(client.run(os.getpid).values())
+        started = threading.Event()
+        result = _study(scenarios, 160).run(scheduler=client,
+                                            progress=_kill_one_when_started(lambda: os.kill(pids[0], signal.SIGKILL), started))
+        assert started.is_set()
+        failed = result.frame[~result.frame["converged"]]
+        assert len(result.frame) == 160 and failed.empty, failed[["sample", "status", "message", "worker"]].to_string()
+        assert sorted(result.frame["sample"]) == list(range(160))
+        client.wait_for_workers(2, timeout=60)          # the nanny started a new one
+        assert pids[0] not in client.run(os.getpid).values()
+    finally:
+        client.close()
+
+
+def test_a_killed_pool_process_loses_no_sample(scenarios):
+    def kill():
+        workers = [p for p in multiprocessing.active_children() if p.name.startswith("SpawnProcess")]
+        os.kill(workers[0].pid, signal.SIGKILL)
+
+    started = threading.Event()
+    result = _study(scenarios, 160).run(workers=2, progress=_kill_one_when_started(kill, started))
+    assert started.is_set()
+    assert len(result.frame) == 160 and result.frame["converged"].all()
+    assert result.frame["worker"].nunique() >= 3            # the pool was started again
+    serial = _study(scenarios, 160).run()
+    assert_allclose(result.frame[TIP].to_numpy(float), serial.frame[TIP].to_numpy(float), rtol=0, atol=1e-9)
+    assert np.all(result.frame["balance [-]"] < 1e-9)
