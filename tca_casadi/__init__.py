@@ -20,7 +20,8 @@ _LAZY = {"Simulation": ".simulation", "solve": ".simulation", "Solution": ".solu
          "InverseResult": ".studies", "Target": ".studies", "Scenario": ".scenario",
          "load_scenario": ".scenario", "Robot": ".model", "TcaLaw": ".model",
          "TimeSimulation": ".studies.timeline", "simulate": ".studies.timeline",
-         "Study": ".studies.study", "StudyResult": ".studies.study_result"}
+         "Study": ".studies.study", "StudyResult": ".studies.study_result",
+         "Fit": ".studies.fit", "FitResult": ".studies.fit_result"}
 
 __all__ = list(_LAZY) + ["ScenarioError", "SolverError", "ModelError", "OutputError", "TcaError",
                          "PhysicsWarning"]

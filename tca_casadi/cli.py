@@ -1,9 +1,10 @@
-"""Command line: ``tca-casadi validate|solve|check|sweep|inverse|sequence|simulate|study SCENARIO ...``.
+"""Command line: ``tca-casadi validate|solve|check|sweep|inverse|sequence|simulate|study|fit SCENARIO ...``.
 
 Exit codes: 0 success, 1 the solver did not converge (``check``: the solvers disagree),
 2 bad input (one line on stderr). ``sweep``: 1 when the run stopped before the stop value;
 ``inverse``: 1 when a target is unreachable (the closest pose is still written); ``study``: 1
-when some samples did not converge (they are rows with their reason).
+when some samples did not converge (they are rows with their reason); ``fit``: 1 when the least
+squares did not converge.
 """
 import argparse
 import json
@@ -148,6 +149,29 @@ def build_parser():
     study.add_argument("--color", default=None, metavar="COLUMN",
                        help="the column that colours the workspace plot (default the first input)")
     _output_arguments(study, "study", "the study PNGs")
+
+    fit = commands.add_parser("fit", help="calibrate parameters to measurements (weighted least squares, exact "
+                              "Jacobians); fit.json with intervals and correlations, fitted.yaml, plots")
+    _scenario_arguments(fit)
+    fit.add_argument("--data", required=True, type=Path, metavar="CSV",
+                     help="one row per experiment: inputs by scenario path [unit], measured columns (tip_x [mm], "
+                          "MODULE.tip_x, ACTUATOR.stroke, ACTUATOR.tension) and optional sigma_NAME columns")
+    fit.add_argument("--param", dest="params", action="append", required=True, metavar="PATH",
+                     help="a parameter to fit (any NLP parameter, e.g. materials.ecoflex30.youngs_modulus); repeatable")
+    fit.add_argument("--bounds", action="append", default=[], metavar="PATH=LO:HI", help="bounds of a fitted parameter")
+    fit.add_argument("--sigma", action="append", default=[], metavar="KIND=VALUE",
+                     help="standard deviation of measurements without a sigma column: length=0.1mm, force=1mN "
+                          "(the defaults)")
+    fit.add_argument("--absolute-sigma", action="store_true",
+                     help="trust the sigmas (do not scale the covariance by the residual variance)")
+    fit.add_argument("--starts", type=int, default=1, help="starting points in the bounds (default 1: the nominal)")
+    fit.add_argument("--holdout", type=float, default=None, metavar="FRACTION",
+                     help="leave this fraction of the experiments out of the fit and report their error")
+    fit.add_argument("--seed", type=int, default=0, help="seed of --holdout and --starts (default 0)")
+    fit.add_argument("--profile", default=None, metavar="PATH",
+                     help="also the profile likelihood of this fitted parameter (its 95 % interval, to compare "
+                          "with the Wald interval)")
+    _output_arguments(fit, "fit", "fit.png and fit_parameters.png")
     return parser
 
 
@@ -439,6 +463,45 @@ def _study(args):
     return 0 if result.info["failed"] == 0 else 1
 
 
+def _fit(args):
+    from .simulation import Simulation
+    from .studies.fit import Fit
+    from .units import to_si
+    sim = Simulation.from_file(Path(args.scenario), args.overrides)
+    sigmas = {}
+    for text in args.sigma:
+        kind, sep, value = text.partition("=")
+        if not sep or kind not in ("length", "force"):
+            raise ScenarioError(f"--sigma {text!r}: give length=VALUE or force=VALUE (e.g. length=0.1mm)")
+        try:
+            sigmas[kind] = to_si(_number(value), kind)
+        except ValueError as exc:
+            raise ScenarioError(f"--sigma {text!r}: {exc}") from None
+        if not sigmas[kind] > 0:
+            raise ScenarioError(f"--sigma {text!r}: give a positive value")
+    bounds = {}
+    for text in args.bounds:
+        path, sep, rest = text.partition("=")
+        parts = rest.split(":")
+        if not sep or len(parts) != 2 or not all(p.strip() for p in parts):
+            raise ScenarioError(f"--bounds {text!r}: give PATH=LO:HI")
+        bounds[path.strip()] = (_number(parts[0]), _number(parts[1]))
+    fit = Fit(sim, args.data, args.params, bounds=bounds, sigmas=sigmas, absolute_sigma=args.absolute_sigma,
+              starts=args.starts, holdout=args.holdout, seed=args.seed)
+    plots = ["fit.png", "fit_parameters.png"]
+    output = prepare_directory(args.output or default_directory(sim.scenario.name, "fit"),
+                               ["fit.json", "fitted.yaml"] + plots, stale=plots if args.no_plot else [])
+    if args.profile is not None and args.profile not in args.params:
+        raise ScenarioError(f"--profile {args.profile}: not one of the fitted parameters (--param)")
+    result = _with_progress(fit.run, "fit", quiet=args.quiet)
+    if args.profile is not None:
+        result.profile = fit.profile(result, args.profile)
+    written = result.save(output, plots=not args.no_plot)
+    print(result.summary())
+    print("wrote " + ", ".join(str(p) for p in written))
+    return 0 if result.converged else 1
+
+
 def _vary_spec(text, option):
     """``(path, spec)`` of ``PATH=LO:HI[:N]`` (--vary) or ``PATH=normal:MEAN:STD`` /
     ``PATH=uniform:LO:HI`` (--monte-carlo)."""
@@ -465,7 +528,7 @@ def _vary_spec(text, option):
 
 
 COMMANDS = {"validate": _validate, "solve": _solve, "check": _check, "sweep": _sweep,
-            "inverse": _inverse, "sequence": _sequence, "simulate": _simulate, "study": _study}
+            "inverse": _inverse, "sequence": _sequence, "simulate": _simulate, "study": _study, "fit": _fit}
 
 if __name__ == "__main__":
     sys.exit(main())

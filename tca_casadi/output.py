@@ -94,10 +94,13 @@ def write_json(path, data):
     return write_text(path, json.dumps(data, indent=2))
 
 
-def write_csv(path, header, rows):
-    """Write a CSV (``header`` list, ``rows`` of lists) atomically; return ``path``."""
+def write_csv(path, header, rows, comments=()):
+    """Write a CSV (``header`` list, ``rows`` of lists) atomically, after ``comments`` as ``#``
+    lines; return ``path``."""
     import csv
     with atomic_path(path) as temporary, open(temporary, "w", newline="", encoding="utf-8") as handle:
+        for line in comments:
+            handle.write(f"# {line}\n")
         writer = csv.writer(handle)
         writer.writerow(header)
         writer.writerows(rows)

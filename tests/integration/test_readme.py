@@ -68,7 +68,7 @@ def _skipped(command):
 def workdir(tmp_path_factory):
     """A copy of the repository's scenarios and scripts, as a fresh clone has them."""
     directory = tmp_path_factory.mktemp("readme")
-    for name in ("scenarios", "scripts"):
+    for name in ("scenarios", "scripts", "data"):
         shutil.copytree(ROOT / name, directory / name)
     return directory
 

@@ -1,0 +1,219 @@
+"""The result of a calibration: the fitted values with their standard errors, 95 % intervals and
+correlations, the identifiability diagnosis, the residuals before and after, and the files
+(``fit.json``, ``fitted.yaml``, ``fit.png``, ``fit_parameters.png``)."""
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..output import atomic_path, write_json
+from .fit import CONDITION_LIMIT, NULL_SHARE, SHARE, SINGULAR
+
+
+@dataclass
+class FittedParameter:
+    path: str
+    unit: str
+    nominal: float
+    value: float
+    standard_error: float = None      # None: not identifiable from the data
+    low: float = None                 # 95 % interval
+    high: float = None
+
+    @property
+    def identifiable(self):
+        return self.standard_error is not None
+
+    def as_dict(self):
+        return {"path": self.path, "unit": self.unit, "nominal": self.nominal, "value": self.value,
+                "standard_error": self.standard_error, "interval_95": None if self.low is None else [self.low, self.high],
+                "identifiable": self.identifiable}
+
+
+@dataclass
+class FitResult:
+    """``parameters`` (FittedParameter), ``correlation`` (p, p; NaN where not identifiable),
+    ``covariance`` (p, p) in the parameters' units, ``condition`` (of the Fisher information
+    ``J^T J`` in scaled parameters), ``warnings`` (texts), residual statistics and status."""
+    parameters: list
+    covariance: np.ndarray
+    correlation: np.ndarray
+    condition: float
+    warnings: list
+    converged: bool
+    message: str
+    evaluations: int
+    cost: float
+    residual_scale: float            # s: the residuals' RMS in units of sigma
+    rms: dict                        # before/after (and held out): per kind
+    residuals: np.ndarray            # (n_train, q) after, SI
+    predicted: np.ndarray            # (n, q) after, SI (every experiment)
+    predicted_before: np.ndarray     # (n, q) at the nominal values
+    names: list
+    train: np.ndarray
+    test: np.ndarray
+    wall_time_s: float
+    data_source: str
+    fit: object = field(default=None, repr=False)
+    profile: dict = None              # Fit.profile of one parameter, on request
+
+    @classmethod
+    def build(cls, fit, theta, optimum, before, after, J, test_residuals, wall_time):
+        model, data = fit.model, fit.data
+        n, p = J.shape
+        scaled = J * fit.scale[None, :]
+        _, singular, vectors = np.linalg.svd(scaled, full_matrices=False)
+        condition = float((singular[0] / singular[-1]) ** 2) if singular[-1] > 0 else float("inf")
+        dof = max(n - p, 1)
+        s2 = 1.0 if fit.absolute_sigma else float(after @ after) / dof
+        weak = singular <= SINGULAR * singular[0]          # all of them when J is zero
+        unidentifiable = set()
+        for k in np.flatnonzero(weak):
+            unidentifiable |= {j for j in range(p) if abs(vectors[k, j]) >= NULL_SHARE}
+        inverse = np.zeros(p)
+        inverse[~weak] = 1.0 / singular[~weak] ** 2
+        covariance_x = (vectors.T * inverse) @ vectors * s2
+        covariance = covariance_x * np.outer(fit.scale, fit.scale)
+        from scipy.stats import t as student
+        quantile = float(student.ppf(0.975, dof))
+        parameters = []
+        for j, parameter in enumerate(fit.parameters):
+            nominal = float(fit.nominal[j])
+            if j in unidentifiable:
+                parameters.append(FittedParameter(parameter.path, parameter.unit, nominal, float(theta[j])))
+                continue
+            error = float(np.sqrt(max(covariance[j, j], 0.0)))
+            parameters.append(FittedParameter(parameter.path, parameter.unit, nominal, float(theta[j]), error,
+                                              float(theta[j] - quantile * error), float(theta[j] + quantile * error)))
+        errors = np.array([q.standard_error if q.identifiable and q.standard_error > 0 else np.nan for q in parameters])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            correlation = covariance / np.outer(errors, errors)
+        warnings = []
+        if unidentifiable:
+            names = [fit.parameters[j].path for j in sorted(unidentifiable)]
+            warnings.append(("cannot be identified from these data: " + " and ".join(names) +
+                             (" (they change the measurements only in a fixed combination)" if len(names) > 1
+                              else " (the measurements do not depend on it)") +
+                             f"; Fisher information condition number {condition:.3g}; no interval given"))
+        elif condition > CONDITION_LIMIT:
+            k = int(np.argmin(singular))
+            names = [fit.parameters[j].path for j in range(p) if abs(vectors[k, j]) >= SHARE]
+            warnings.append(f"hard to tell apart: {' and '.join(names)} (Fisher information condition number "
+                            f"{condition:.3g}); their intervals are wide and strongly correlated")
+        for i in range(p):
+            for j in range(i + 1, p):
+                if np.isfinite(correlation[i, j]) and abs(correlation[i, j]) > 0.99:
+                    warnings.append(f"{fit.parameters[i].path} and {fit.parameters[j].path} are correlated "
+                                    f"{correlation[i, j]:+.4f}: the data hardly tell them apart")
+        q = len(data.names)
+        predicted = model.predictions(theta)
+        predicted_before = _nominal_predictions(fit)
+        rms = {"before": _rms(fit, data.values[fit.train] - predicted_before[fit.train]),
+               "after": _rms(fit, data.values[fit.train] - predicted[fit.train])}
+        if fit.test.size:
+            rms["held_out"] = _rms(fit, data.values[fit.test] - predicted[fit.test])
+        return cls(parameters, covariance, correlation, condition, warnings, bool(optimum.success),
+                   str(optimum.message), int(optimum.nfev), float(optimum.cost), float(np.sqrt(s2)),
+                   rms, (data.values[fit.train] - predicted[fit.train]).reshape(-1, q), predicted,
+                   predicted_before, list(data.names), fit.train, fit.test, wall_time, data.source, fit)
+
+    # ------------------------------------------------------------------ text and files
+    def summary(self):
+        lines = [f"fit of {len(self.parameters)} parameter(s) to {len(self.train)} experiment(s) "
+                 f"({len(self.names)} quantities each): {'converged' if self.converged else 'NOT CONVERGED'} "
+                 f"in {self.evaluations} evaluations, {self.wall_time_s:.2f} s"]
+        for q in self.parameters:
+            interval = (f"+- {q.standard_error:.3g} (95 %: {q.low:.6g} to {q.high:.6g})" if q.identifiable
+                        else "not identifiable")
+            lines.append(f"  {q.path} = {q.value:.6g} {q.unit} {interval}; nominal {q.nominal:.6g}")
+        for when in ("before", "after", "held_out"):
+            if when in self.rms and "length_mm" in self.rms[when]:
+                r = self.rms[when]
+                lines.append(f"  RMS {when.replace('_', ' ')}: {r['length_mm']:.4g} mm ({r['length_percent']:.3g} % of "
+                             f"the robot's length)" + (f", {r['force_mN']:.4g} mN" if "force_mN" in r else ""))
+        lines.append(f"  residual scale {self.residual_scale:.3g} sigma; Fisher condition number {self.condition:.3g}")
+        if self.profile is not None:
+            low, high = self.profile["interval_95"]
+            wald = self.profile["wald_interval_95"]
+            show = lambda v: "beyond the profiled range" if v is None else f"{v:.6g}"     # noqa: E731
+            lines.append(f"  profile likelihood of {self.profile['path']}: 95 % from {show(low)} to {show(high)} "
+                         f"(Wald: {wald[0]:.6g} to {wald[1]:.6g})")
+        lines += [f"  warning: {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+    def to_dict(self):
+        return {"converged": self.converged, "message": self.message, "evaluations": self.evaluations,
+                "wall_time_s": self.wall_time_s, "data": self.data_source,
+                "experiments": {"fitted": len(self.train), "held_out": len(self.test)},
+                "measured": self.names, "parameters": [q.as_dict() for q in self.parameters],
+                "correlation": _nan_to_none(self.correlation), "covariance": _nan_to_none(self.covariance),
+                "fisher_condition_number": self.condition, "residual_scale_sigma": self.residual_scale,
+                "rms": self.rms, "warnings": self.warnings, "profile": self.profile,
+                "residuals": [dict(zip(self.names, map(float, row)), experiment=int(k) + 1)
+                              for k, row in zip(self.train, self.residuals)]}
+
+    def fitted_scenario(self):
+        """The scenario's raw mapping with the fitted values written in (every fitted layout
+        entry in full, SI numbers; temperatures in degC)."""
+        from ..scenario.overrides import apply_overrides
+        sim = self.fit.sim
+        params = sim.params.copy()
+        for parameter, fitted in zip(self.fit.parameters, self.parameters):
+            params = parameter.with_value(params, fitted.value)
+        overrides = {}
+        for parameter in self.fit.parameters:
+            value = params[parameter.slice]
+            overrides[parameter.name] = float(value[0]) if value.size == 1 else [float(v) for v in value]
+        raw = sim.scenario._raw if sim.scenario._raw is not None else sim.scenario.model_dump(mode="json")
+        return apply_overrides(raw, overrides)
+
+    def save(self, directory, plots=True):
+        """Write fit.json, fitted.yaml and (``plots``) fit.png and fit_parameters.png."""
+        import yaml
+        directory = Path(directory)
+        directory.mkdir(parents=True, exist_ok=True)
+        written = [write_json(directory / "fit.json", self.to_dict())]
+        header = ("# written by tca-casadi fit: the scenario with the fitted values (SI; temperatures degC)\n# "
+                  + "\n# ".join(f"{q.path} = {q.value:.8g} {q.unit}" + (f" +- {q.standard_error:.3g}" if q.identifiable
+                                                                         else " (not identifiable)")
+                                for q in self.parameters) + "\n")
+        with atomic_path(directory / "fitted.yaml") as temporary:
+            temporary.write_text(header + yaml.safe_dump(self.fitted_scenario(), sort_keys=False))
+        written.append(directory / "fitted.yaml")
+        if plots:
+            from ..plotting.fit_plots import plot_fit, plot_fit_parameters
+            written += [plot_fit(self, directory / "fit.png"), plot_fit_parameters(self, directory / "fit_parameters.png")]
+        return written
+
+
+def _nominal_predictions(fit):
+    return fit.model.predictions(fit.nominal)
+
+
+def _rms(fit, difference):
+    """RMS of the differences (n, q) per kind: lengths in mm and % of the robot's length, forces in mN."""
+    from ..discretisation.measurements import quantity_kind
+    robot = fit.sim.robot
+    kinds = [quantity_kind(robot, name) for name in fit.data.names]
+    out = {}
+    lengths = difference[:, [k == "length" for k in kinds]]
+    if lengths.size:
+        value = float(np.sqrt(np.mean(lengths ** 2)))
+        out.update({"length_mm": value * 1e3, "length_percent": 100 * value / robot_length(robot)})
+    forces = difference[:, [k == "force" for k in kinds]]
+    if forces.size:
+        out["force_mN"] = float(np.sqrt(np.mean(forces ** 2))) * 1e3
+    return out
+
+
+def robot_length(robot):
+    """The length [m] of the modules from the base to the tip."""
+    total, m = 0.0, robot.tip_index
+    while m is not None:
+        total += robot.modules[m].length
+        m = robot.modules[m].parent
+    return total
+
+
+def _nan_to_none(matrix):
+    return [[None if not np.isfinite(v) else float(v) for v in row] for row in np.asarray(matrix)]

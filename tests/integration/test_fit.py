@@ -1,0 +1,193 @@
+"""Calibration (``tc.Fit``, ``tca-casadi fit``): the exact Jacobian against central
+differences, recovery of known values from synthetic data (coverage of the 95 % intervals),
+unidentifiable parameters reported as such, the files, bad input."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import yaml
+from numpy.testing import assert_allclose
+
+import tca_casadi as tc
+from tca_casadi.cli import main
+from tca_casadi.studies.fit import Fit, synthetic_measurements, write_measurements
+
+ROOT = __import__("pathlib").Path(__file__).resolve().parents[2]
+E = "materials.ecoflex30.youngs_modulus"
+FIBER = "tca_types.nylon.fiber_radius"
+TIP = ["tip_x", "tip_y", "tip_z"]
+
+
+@pytest.fixture
+def sim(scenarios):
+    return tc.Simulation.from_file(scenarios / "bending_module.yaml")
+
+
+def _temperatures(count, seed):
+    rng = np.random.default_rng(seed)
+    return {f"bending.tca{k}.temperature": np.round(rng.uniform(25, 125, count), 1) for k in (1, 2, 3)}
+
+
+def test_exact_jacobian_equals_central_differences(sim):
+    """Every kind of measured quantity (the tip, a module's end, a stroke, a tension) against four
+    parameters (a modulus, the TCA geometry, a route's radius: it moves the reference length
+    too, a fit coefficient): to 1e-6 of each column's largest entry. Fourth-order central
+    differences with steps of 1e-3 of each value: their truncation (~1e-12) and Newton's
+    tolerance over the step (1e-10 / 1e-3) both stay well below the bound."""
+    names = TIP + ["bending.tip_x", "bending.tca1.stroke", "bending.tca2.tension", "bending.tca3.length"]
+    params = [E, FIBER, "bending.tca1.route.radius", "tca_types.nylon.untwist.c1"]
+    data = synthetic_measurements(sim, {}, _temperatures(4, 1), names, {"length": 1e-4, "force": 1e-3})
+    fit = Fit(sim, data, params)
+    model, theta = fit.model, fit.nominal * np.array([1.05, 0.97, 1.02, 1.01])
+    exact = model.jacobian(theta, fit.train)
+    for j in range(len(params)):
+        step = 1e-3 * fit.scale[j]
+
+        def at(k):
+            moved = theta.copy()
+            moved[j] += k * step
+            return model.residuals(moved, fit.train)
+        central = (at(-2) - 8 * at(-1) + 8 * at(1) - at(2)) / (12 * step)
+        assert_allclose(exact[:, j], central, rtol=0, atol=1e-6 * np.max(np.abs(central)))
+        assert np.max(np.abs(central)) > 0
+
+
+def test_recovery_and_coverage(sim):
+    """Synthetic data at known values of two parameters with 0.05 mm noise
+    (``scripts/fit_coverage.py``): over 20 seeded repetitions the 95 % intervals hold the true
+    values about 38 times of 40 (at least 34 asserted: fewer has probability below 1 % for
+    honest intervals); the residuals' RMS equals the noise (mean residual scale within 0.15 of 1
+    sigma; every fit's within 0.5 to 1.6 for its 30 residuals)."""
+    sys.path.insert(0, str(ROOT / "scripts"))
+    from fit_coverage import coverage
+    inside, total, scales = coverage(sim, 20)
+    assert total == 40 and inside >= 34, inside
+    assert_allclose(np.mean(scales), 1.0, rtol=0, atol=0.15)
+    assert all(0.5 < s < 1.6 for s in scales)
+
+
+def test_unidentifiable_parameters_are_reported(sim):
+    """With every heated TCA at one temperature, the untwist fit's c1 and c2 change the data only
+    through c2 (T^2 - T0^2) + c1 (T - T0): a pair that cannot be told apart. c0 cancels in the
+    law altogether. Neither gets an interval, and the warning names them."""
+    inputs = {"bending.tca2.temperature": np.full(6, 100.0), "bending.tca3.temperature": np.full(6, 100.0),
+              "tip_force.force.x": np.linspace(-2e-3, 2e-3, 6)}
+    data = synthetic_measurements(sim, {}, inputs, TIP, {"length": 5e-5}, 3)
+    result = Fit(sim, data, ["tca_types.nylon.untwist.c1", "tca_types.nylon.untwist.c2", E]).run()
+    by_path = {q.path: q for q in result.parameters}
+    assert not by_path["tca_types.nylon.untwist.c1"].identifiable
+    assert not by_path["tca_types.nylon.untwist.c2"].identifiable
+    assert by_path[E].identifiable
+    assert any("tca_types.nylon.untwist.c1 and tca_types.nylon.untwist.c2" in w for w in result.warnings)
+    alone = Fit(sim, data, ["tca_types.nylon.untwist.c0"]).run()
+    assert not alone.parameters[0].identifiable
+    assert "do not depend on it" in alone.warnings[0]
+
+
+def test_cli_on_the_shipped_example(tmp_path, capsys):
+    """The shipped dataset: four parameters recovered within their intervals; the fitted
+    scenario reproduces the fitted predictions; the held-out error is reported."""
+    out = tmp_path / "fit"
+    code = main(["fit", str(ROOT / "scenarios" / "bending_module.yaml"), "--data",
+                 str(ROOT / "data" / "bending_module_measurements.csv"), "--param", E, "--param", FIBER,
+                 "--param", "bending.tca1.route.radius", "--param", "tca_types.nylon.untwist.c1",
+                 "--holdout", "0.2", "-o", str(out), "--quiet"])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "fit of 4 parameter(s) to 40 experiment(s)" in text and "RMS held out" in text
+    report = json.loads((out / "fit.json").read_text())
+    sys.path.insert(0, str(ROOT / "scripts"))
+    from make_fit_data import NOISE_MM, TRUTH
+    for entry in report["parameters"]:
+        low, high = entry["interval_95"]
+        assert low <= TRUTH[entry["path"]] <= high, entry
+    assert_allclose(report["rms"]["after"]["length_mm"], NOISE_MM, rtol=0.25)
+    assert report["rms"]["before"]["length_mm"] > 5 * report["rms"]["after"]["length_mm"]   # 0.27 -> 0.045 mm
+    fitted = yaml.safe_load((out / "fitted.yaml").read_text())
+    assert fitted["materials"]["ecoflex30"]["youngs_modulus"] == pytest.approx(report["parameters"][0]["value"], rel=1e-12)
+    first = report["residuals"][0]["experiment"]
+    header = [line for line in (ROOT / "data" / "bending_module_measurements.csv").read_text().splitlines()
+              if not line.startswith("#")]
+    row = dict(zip(header[0].split(","), header[first].split(",")))
+    again = tc.Simulation.from_file(out / "fitted.yaml", [
+        f"bending.tca{k}.temperature={row[f'bending.tca{k}.temperature [degC]']}" for k in (1, 2, 3)]).solve(warn=False)
+    measured = np.array([float(row[f"{a} [mm]"]) for a in TIP]) * 1e-3
+    residual = np.array([report["residuals"][0][a] for a in TIP])
+    assert_allclose(measured - again.tip_position, residual, rtol=0, atol=1e-9)
+    for name in ("fit.png", "fit_parameters.png"):
+        assert (out / name).stat().st_size > 10000
+
+
+def test_shipped_dataset_is_what_the_script_makes(tmp_path):
+    """data/bending_module_measurements.csv is the output of scripts/make_fit_data.py (to the
+    digits it is written with)."""
+    run = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_fit_data.py"), "-o", str(tmp_path / "m.csv")],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert (tmp_path / "m.csv").read_text() == (ROOT / "data" / "bending_module_measurements.csv").read_text()
+
+
+@pytest.fixture
+def data_file(sim, tmp_path):
+    data = synthetic_measurements(sim, {}, _temperatures(3, 0), TIP, {"length": 1e-4})
+    return write_measurements(tmp_path / "data.csv", data)
+
+
+def _edit(path, old, new):
+    path.write_text(path.read_text().replace(old, new, 1))
+    return path
+
+
+@pytest.mark.parametrize("change, args, message", [
+    (("tip_x [mm]", "tip_w [mm]"), [], "column 'tip_w [mm]' is neither a scenario parameter nor a measured quantity"),
+    (("tip_x [mm]", "tip_x [N]"), [], "column 'tip_x [N]': [N] is not a unit of length"),
+    (("bending.tca1.temperature [degC]", "bending.tca1.temperature [mm]"), [], "bending.tca1.temperature"),
+    (None, ["--param", "bending.length"], "structure cannot be fitted"),
+    (None, ["--bounds", f"{E}=0.2MPa:0.3MPa"], "excludes the nominal value"),
+    (None, ["--param", FIBER, "--param", "bending.tca1.route.radius", "--param", "bending.tca2.route.radius",
+            "--param", "bending.tca3.route.radius", "--param", "tca_types.nylon.coil_radius",
+            "--param", "tca_types.nylon.untwist.c1", "--param", "tca_types.nylon.untwist.c2",
+            "--param", "tca_types.nylon.shear_modulus.a0"], "9 measured values for 10 parameters"),
+    (None, ["--sigma", "length=-1mm"], "positive"),
+    (None, ["--holdout", "1.5"], "holdout"),
+])
+def test_bad_input_is_one_line_exit_2(data_file, tmp_path, capsys, change, args, message):
+    if change is not None:
+        _edit(data_file, *change)
+    code = main(["fit", str(ROOT / "scenarios" / "bending_module.yaml"), "--data", str(data_file), "--param", E,
+                 "--param", "tca_types.nylon.pitch_angle"] + args + ["-o", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and err.count("\n") == 1, err
+
+
+def test_nan_row_names_its_row(data_file, tmp_path, capsys):
+    lines = data_file.read_text().splitlines()
+    cells = lines[2].split(",")
+    cells[-4] = "nan"
+    lines[2] = ",".join(cells)
+    data_file.write_text("\n".join(lines) + "\n")
+    code = main(["fit", str(ROOT / "scenarios" / "bending_module.yaml"), "--data", str(data_file), "--param", E,
+                 "-o", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2 and "row 3" in err and "NaN" in err, err
+
+
+def test_profile_likelihood_agrees_with_the_wald_interval(sim):
+    """For a nearly linear problem (the modulus alone, 20 synthetic experiments) the profile
+    likelihood's 95 % interval equals the Wald interval within 5 % of its width, its statistic
+    is 0 at the estimate and rises on both sides; with a second fitted parameter refitted at
+    each point it is at least as wide as with it held (profiling never narrows)."""
+    data = synthetic_measurements(sim, {E: 0.14e6}, _temperatures(20, 4), TIP, {"length": 5e-5}, 4)
+    fit = Fit(sim, data, [E])
+    result = fit.run()
+    profile = fit.profile(result, E)
+    width = result.parameters[0].high - result.parameters[0].low
+    assert_allclose(profile["interval_95"], profile["wald_interval_95"], rtol=0, atol=0.05 * width)
+    statistic = np.array(profile["statistic"])
+    assert abs(statistic[4]) < 1e-6 and np.all(np.diff(statistic[:5]) < 0) and np.all(np.diff(statistic[4:]) > 0)
+    both = Fit(sim, data, [E, FIBER])
+    joint = both.run()
+    profiled = both.profile(joint, E)
+    assert profiled["interval_95"][1] - profiled["interval_95"][0] >= 0.99 * width
