@@ -1,7 +1,8 @@
-"""Make the shipped calibration example: measurements of the bending module made by the model
+"""Make the shipped calibration examples: measurements of the bending module made by the model
 itself at known parameter values, with stated noise.
 
     python scripts/make_fit_data.py [-o data/bending_module_measurements.csv] [--experiments 50]
+    python scripts/make_fit_data.py --heating [-o data/bending_module_heating_curve.csv]
 
 The true values differ from the scenario's (what a fit should recover); 50 experiments at Latin
 hypercube temperatures of the three TCAs (25-125 degC); the tip measured with Gaussian noise of
@@ -25,6 +26,9 @@ TRUTH = {"materials.ecoflex30.youngs_modulus": 0.14e6, "tca_types.nylon.fiber_ra
          "bending.tca1.route.radius": 4.3e-3, "tca_types.nylon.untwist.c1": 0.32}
 NOISE_MM = 0.05
 SEED = 7
+#: the heating curve's thermal constants (the fibre gives C = 0.137 J/K, G = 7.07 mW/K: tau 19.4 s)
+HEATING_TRUTH = {"tca_types.nylon.thermal.heat_capacity": 0.16, "tca_types.nylon.thermal.conductance": 0.0065}
+NOISE_K = 0.3
 
 
 def make(experiments=50, seed=SEED):
@@ -39,12 +43,36 @@ def make(experiments=50, seed=SEED):
     return synthetic_measurements(sim, TRUTH, inputs, ["tip_x", "tip_y", "tip_z"], {"length": NOISE_MM * 1e-3}, seed)
 
 
+def make_heating(seed=SEED):
+    """The heating curve of ``scenarios/bending_module_heating.yaml``: TCA 2's temperature every
+    second for 80 s at :data:`HEATING_TRUTH` with :data:`NOISE_K` of noise."""
+    import tca_casadi as tc
+    from tca_casadi.studies.thermal_fit import synthetic_heating_curve
+    sim = tc.Simulation.from_file(ROOT / "scenarios" / "bending_module_heating.yaml")
+    return synthetic_heating_curve(sim, HEATING_TRUTH, ["bending.tca2.temperature"], np.arange(0.0, 80.5, 1.0),
+                                   NOISE_K, seed)
+
+
 def main(argv=None):
     from tca_casadi.studies.fit import write_measurements
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("-o", "--output", type=Path, default=ROOT / "data" / "bending_module_measurements.csv")
+    parser.add_argument("-o", "--output", type=Path, default=None)
     parser.add_argument("--experiments", type=int, default=50)
+    parser.add_argument("--heating", action="store_true", help="the heating curve instead")
     args = parser.parse_args(argv)
+    if args.heating:
+        from tca_casadi.studies.thermal_fit import write_heating_curve
+        output = args.output or ROOT / "data" / "bending_module_heating_curve.csv"
+        output.parent.mkdir(parents=True, exist_ok=True)
+        truth = ", ".join(f"{k} = {v:g}" for k, v in HEATING_TRUTH.items())
+        write_heating_curve(output, make_heating(), [
+            "Synthetic heating curve of TCA 2 of scenarios/bending_module_heating.yaml (0.3 W from 1 s to 40 s),",
+            f"made by tca_casadi itself (scripts/make_fit_data.py --heating) at known thermal constants: {truth}",
+            f"(SI; time constant {HEATING_TRUTH['tca_types.nylon.thermal.heat_capacity'] / HEATING_TRUTH['tca_types.nylon.thermal.conductance']:.4g} s), "
+            f"with Gaussian noise of {NOISE_K} K (seed {SEED}). Not an experiment: a test of the fit."])
+        print(f"wrote {output}")
+        return
+    args.output = args.output or ROOT / "data" / "bending_module_measurements.csv"
     data = make(args.experiments)
     args.output.parent.mkdir(parents=True, exist_ok=True)
     truth = ", ".join(f"{k} = {v:g}" for k, v in TRUTH.items())

@@ -160,8 +160,8 @@ def build_parser():
                      help="a parameter to fit (any NLP parameter, e.g. materials.ecoflex30.youngs_modulus); repeatable")
     fit.add_argument("--bounds", action="append", default=[], metavar="PATH=LO:HI", help="bounds of a fitted parameter")
     fit.add_argument("--sigma", action="append", default=[], metavar="KIND=VALUE",
-                     help="standard deviation of measurements without a sigma column: length=0.1mm, force=1mN "
-                          "(the defaults)")
+                     help="standard deviation of measurements without a sigma column: length=0.1mm, force=1mN, "
+                          "temperature=0.5K (the defaults)")
     fit.add_argument("--absolute-sigma", action="store_true",
                      help="trust the sigmas (do not scale the covariance by the residual variance)")
     fit.add_argument("--starts", type=int, default=1, help="starting points in the bounds (default 1: the nominal)")
@@ -471,10 +471,11 @@ def _fit(args):
     sigmas = {}
     for text in args.sigma:
         kind, sep, value = text.partition("=")
-        if not sep or kind not in ("length", "force"):
-            raise ScenarioError(f"--sigma {text!r}: give length=VALUE or force=VALUE (e.g. length=0.1mm)")
+        if not sep or kind not in ("length", "force", "temperature"):
+            raise ScenarioError(f"--sigma {text!r}: give length=VALUE, force=VALUE or temperature=VALUE "
+                                "(e.g. length=0.1mm)")
         try:
-            sigmas[kind] = to_si(_number(value), kind)
+            sigmas[kind] = to_si(_number(value), kind) if kind != "temperature" else _kelvin(_number(value))
         except ValueError as exc:
             raise ScenarioError(f"--sigma {text!r}: {exc}") from None
         if not sigmas[kind] > 0:
@@ -500,6 +501,17 @@ def _fit(args):
     print(result.summary())
     print("wrote " + ", ".join(str(p) for p in written))
     return 0 if result.converged else 1
+
+
+def _kelvin(value):
+    """A temperature difference [K] from a number or ``"0.5 K"`` (degC steps are kelvin)."""
+    if isinstance(value, float):
+        return value
+    from .units import ureg
+    try:
+        return float(ureg.Quantity(value.replace("degC", "K")).to("K").magnitude)
+    except Exception:                       # pint's parse and dimension errors
+        raise ValueError(f"{value!r} is not a temperature difference (e.g. 0.5 K)") from None
 
 
 def _vary_spec(text, option):

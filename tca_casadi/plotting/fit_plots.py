@@ -9,8 +9,7 @@
 """
 import numpy as np
 
-from ..output import save_figure
-from .robot3d import _pyplot
+from .robot3d import _pyplot, finish
 
 
 def _scale(name):
@@ -18,6 +17,8 @@ def _scale(name):
 
 
 def plot_fit(result, path):
+    if result.fit.time_series:
+        return plot_heating_fit(result, path)
     plt = _pyplot()
     names = result.names[:6]
     columns = len(names) + 1
@@ -54,7 +55,14 @@ def plot_fit(result, path):
         ax.set_xlabel(f"measured {name} [{unit}]")
         ax.set_ylabel(f"predicted [{unit}]")
         ax.legend(fontsize=7)
-    ax = axes[-1]
+    _residual_histogram(axes[-1], result)
+    fig.suptitle(f"fit to {len(result.train)} experiments: RMS {result.rms['before'].get('length_mm', float('nan')):.3g}"
+                 f" -> {result.rms['after'].get('length_mm', float('nan')):.3g} mm", fontsize=10)
+    return finish(plt, fig, path)
+
+
+def _residual_histogram(ax, result):
+    """The fitted residuals in units of their sigma, against the standard normal density."""
     weighted = (result.residuals / result.fit.data.sigmas[result.train]).ravel()
     ax.hist(weighted, bins=max(8, min(40, weighted.size // 5)), density=True, color="tab:blue", alpha=0.7)
     grid = np.linspace(min(-4, weighted.min()), max(4, weighted.max()), 200)
@@ -62,12 +70,30 @@ def plot_fit(result, path):
     ax.set_xlabel("residual / sigma")
     ax.set_ylabel("density")
     ax.legend(fontsize=7)
-    fig.suptitle(f"fit to {len(result.train)} experiments: RMS {result.rms['before'].get('length_mm', float('nan')):.3g}"
-                 f" -> {result.rms['after'].get('length_mm', float('nan')):.3g} mm", fontsize=10)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=110)
-    plt.close(fig)
-    return path
+
+
+def plot_heating_fit(result, path):
+    """A heating-curve fit: the measured temperatures against time with the model before and
+    after, the residuals against time, and their histogram in units of sigma."""
+    plt = _pyplot()
+    data = result.fit.data
+    fig, (top, middle, right) = plt.subplots(1, 3, figsize=(15, 4.2))
+    for j, name in enumerate(result.names):
+        top.plot(data.times, data.values[:, j], ".", markersize=4, label=f"measured {name}")
+        top.plot(data.times, result.predicted_before[:, j], "--", color="tab:gray", label="before (nominal)")
+        top.plot(data.times, result.predicted[:, j], "-", color="tab:blue", label="after")
+        middle.plot(data.times[result.train], result.predicted[result.train, j] - data.values[result.train, j], ".",
+                    label=name)
+    top.set_xlabel("t [s]")
+    top.set_ylabel("temperature [degC]")
+    top.legend(fontsize=7)
+    middle.axhline(0, color="black", linewidth=0.8)
+    middle.set_xlabel("t [s]")
+    middle.set_ylabel("predicted - measured [K]")
+    _residual_histogram(right, result)
+    fig.suptitle(f"heating-curve fit: RMS {result.rms['before']['temperature_K']:.3g} -> "
+                 f"{result.rms['after']['temperature_K']:.3g} K", fontsize=10)
+    return finish(plt, fig, path)
 
 
 def plot_fit_parameters(result, path):
@@ -87,7 +113,4 @@ def plot_fit_parameters(result, path):
     ax.set_yticks(range(count), [f"{q.path} [{q.unit}]" for q in result.parameters], fontsize=8)
     ax.set_xlabel("fitted value / nominal value (95 % interval)")
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=110)
-    plt.close(fig)
-    return path
+    return finish(plt, fig, path)

@@ -6,6 +6,15 @@ COLORS = {"heated": "#d62728", "passive": "#2ca02c", "tendon": "#ff7f0e",
           "section": "#1f77b4", "centerline": "black", "object": "#7f7f7f", "held": "#9467bd"}
 
 
+def finish(plt, fig, path, dpi=110):
+    """Lay out ``fig``, save it atomically at ``path``, close it; return ``path``."""
+    from ..output import save_figure
+    fig.tight_layout()
+    save_figure(fig, path, dpi=dpi)
+    plt.close(fig)
+    return path
+
+
 def _pyplot():
     import matplotlib
     if matplotlib.get_backend().lower() not in ("agg", "pdf", "svg") and not _has_display():

@@ -11,8 +11,7 @@
 """
 import numpy as np
 
-from ..output import save_figure
-from .robot3d import _pyplot, set_equal_limits, style_axes
+from .robot3d import _pyplot, finish, set_equal_limits, style_axes
 
 PLANES = (("x", "y", 0, 1), ("x", "z", 0, 2), ("y", "z", 1, 2))
 
@@ -79,7 +78,7 @@ def plot_workspace(result, path, color=None):
         ax.set_title(f"reachability density, {a}{b}", fontsize=9)
     fig.suptitle(f"{result.info['scenario']}: workspace ({result.info['design']}, "
                  f"{result.info['converged']} of {result.info['samples']} samples converged)")
-    return _saved(plt, fig, path)
+    return finish(plt, fig, path)
 
 
 def plot_monte_carlo(result, path):
@@ -112,14 +111,7 @@ def plot_monte_carlo(result, path):
     varied = ", ".join(a.path for a in result.study.axes if a.distribution)
     title = f"{result.info['scenario']}: Monte Carlo of {varied} ({len(tips)} samples)"
     fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)
-    return _saved(plt, fig, path)
-
-
-def _saved(plt, fig, path):
-    fig.tight_layout()
-    save_figure(fig, path, dpi=110)
-    plt.close(fig)
-    return path
+    return finish(plt, fig, path)
 
 
 def _ellipse(covariance, sigma, points=100):
@@ -158,4 +150,4 @@ def plot_response(result, path):
         ax.set_xlabel(first)
         ax.set_ylabel(second)
     fig.suptitle(f"{result.info['scenario']}: response ({len(data)} samples)", fontsize=10)
-    return _saved(plt, fig, path)
+    return finish(plt, fig, path)

@@ -197,18 +197,27 @@ class Fit:
 
     def __init__(self, sim, data, params, bounds=None, sigmas=None, absolute_sigma=False, starts=1,
                  holdout=None, seed=0):
-        self.sim = sim
-        if sim.solver().has_square_system is False:
-            raise ScenarioError("fit needs the collocation solver (solver.method: collocation)")
-        self.data = data if isinstance(data, Measurements) else read_measurements(data, sim.robot, sim.params, sigmas)
+        from .thermal_fit import HeatingCurve, ThermalFitModel, is_time_series, read_heating_curve, thermal_parameter
+        self.sim, self._model = sim, None
         if not params:
             raise ScenarioError("fit: no parameter to fit (give --param PATH)")
-        self.parameters = [self._parameter(path) for path in params]
-        inputs = {p.name for p in self.data.inputs}
-        for p in self.parameters:
-            if p.name in inputs:
-                raise ScenarioError(f"fit --param {p.path}: it is an input column of the data too")
-        nominal = np.array([p.value(sim.params) for p in self.parameters])
+        self.time_series = isinstance(data, HeatingCurve) or (not isinstance(data, Measurements) and is_time_series(data))
+        if self.time_series:                         # a heating curve: the thermal constants
+            self.data = data if isinstance(data, HeatingCurve) else \
+                read_heating_curve(data, sim.robot, (sigmas or {}).get("temperature"))
+            self.parameters = [thermal_parameter(sim.scenario, path) for path in params]
+            self._model = ThermalFitModel(sim, self.data, self.parameters)
+            nominal = self._model.nominal
+        else:
+            if sim.solver().has_square_system is False:
+                raise ScenarioError("fit needs the collocation solver (solver.method: collocation)")
+            self.data = data if isinstance(data, Measurements) else read_measurements(data, sim.robot, sim.params, sigmas)
+            self.parameters = [self._parameter(path) for path in params]
+            inputs = {p.name for p in self.data.inputs}
+            for p in self.parameters:
+                if p.name in inputs:
+                    raise ScenarioError(f"fit --param {p.path}: it is an input column of the data too")
+            nominal = np.array([p.value(sim.params) for p in self.parameters])
         self.nominal, self.scale = nominal, np.where(nominal != 0, np.abs(nominal), 1.0)
         self.bounds = self._bounds(bounds or {})
         self.absolute_sigma, self.starts, self.seed = absolute_sigma, int(starts), int(seed)
@@ -221,7 +230,24 @@ class Fit:
         if residuals < len(self.parameters):
             raise ScenarioError(f"fit: {residuals} measured values for {len(self.parameters)} parameters; "
                                 "give at least as many measurements as parameters")
-        self._model = None
+
+    def quantity_kind(self, name):
+        """``length``, ``force`` or ``temperature``: the kind of a measured quantity."""
+        return "temperature" if self.time_series else quantity_kind(self.sim.robot, name)
+
+    def fitted_overrides(self, values):
+        """``{scenario path: value}`` that write fitted ``values`` into the scenario (a
+        parameter-vector entry in full, SI; temperatures degC)."""
+        if self.time_series:
+            return {p.path: float(v) for p, v in zip(self.parameters, values)}
+        params = self.sim.params.copy()
+        for parameter, value in zip(self.parameters, values):
+            params = parameter.with_value(params, value)
+        out = {}
+        for parameter in self.parameters:
+            entry = params[parameter.slice]
+            out[parameter.name] = float(entry[0]) if entry.size == 1 else [float(v) for v in entry]
+        return out
 
     def _parameter(self, path):
         try:

@@ -119,18 +119,34 @@ class FitResult:
 
     # ------------------------------------------------------------------ text and files
     def summary(self):
-        lines = [f"fit of {len(self.parameters)} parameter(s) to {len(self.train)} experiment(s) "
-                 f"({len(self.names)} quantities each): {'converged' if self.converged else 'NOT CONVERGED'} "
+        what = (f"a time series of {len(self.train)} samples" if self.fit.time_series
+                else f"{len(self.train)} experiment(s)")
+        lines = [f"fit of {len(self.parameters)} parameter(s) to {what} "
+                 f"({len(self.names)} quantit{'y' if len(self.names) == 1 else 'ies'} each): "
+                 f"{'converged' if self.converged else 'NOT CONVERGED'} "
                  f"in {self.evaluations} evaluations, {self.wall_time_s:.2f} s"]
         for q in self.parameters:
             interval = (f"+- {q.standard_error:.3g} (95 %: {q.low:.6g} to {q.high:.6g})" if q.identifiable
                         else "not identifiable")
             lines.append(f"  {q.path} = {q.value:.6g} {q.unit} {interval}; nominal {q.nominal:.6g}")
         for when in ("before", "after", "held_out"):
-            if when in self.rms and "length_mm" in self.rms[when]:
-                r = self.rms[when]
-                lines.append(f"  RMS {when.replace('_', ' ')}: {r['length_mm']:.4g} mm ({r['length_percent']:.3g} % of "
-                             f"the robot's length)" + (f", {r['force_mN']:.4g} mN" if "force_mN" in r else ""))
+            r = self.rms.get(when, {})
+            parts = []
+            if "length_mm" in r:
+                parts.append(f"{r['length_mm']:.4g} mm ({r['length_percent']:.3g} % of the robot's length)")
+            if "force_mN" in r:
+                parts.append(f"{r['force_mN']:.4g} mN")
+            if "temperature_K" in r:
+                parts.append(f"{r['temperature_K']:.4g} K")
+            if parts:
+                lines.append(f"  RMS {when.replace('_', ' ')}: " + ", ".join(parts))
+        if self.fit.time_series:
+            by_type = {}
+            for q, p in zip(self.parameters, self.fit.parameters):
+                by_type.setdefault(p.tca_type, {})[p.key] = q.value
+            for name, values in by_type.items():
+                if len(values) == 2:
+                    lines.append(f"  tca_types.{name}: time constant C/G = {values['heat_capacity'] / values['conductance']:.4g} s")
         lines.append(f"  residual scale {self.residual_scale:.3g} sigma; Fisher condition number {self.condition:.3g}")
         if self.profile is not None:
             low, high = self.profile["interval_95"]
@@ -157,15 +173,8 @@ class FitResult:
         entry in full, SI numbers; temperatures in degC)."""
         from ..scenario.overrides import apply_overrides
         sim = self.fit.sim
-        params = sim.params.copy()
-        for parameter, fitted in zip(self.fit.parameters, self.parameters):
-            params = parameter.with_value(params, fitted.value)
-        overrides = {}
-        for parameter in self.fit.parameters:
-            value = params[parameter.slice]
-            overrides[parameter.name] = float(value[0]) if value.size == 1 else [float(v) for v in value]
         raw = sim.scenario._raw if sim.scenario._raw is not None else sim.scenario.model_dump(mode="json")
-        return apply_overrides(raw, overrides)
+        return apply_overrides(raw, self.fit.fitted_overrides([q.value for q in self.parameters]))
 
     def save(self, directory, plots=True):
         """Write fit.json, fitted.yaml and (``plots``) fit.png and fit_parameters.png."""
@@ -191,11 +200,14 @@ def _nominal_predictions(fit):
 
 
 def _rms(fit, difference):
-    """RMS of the differences (n, q) per kind: lengths in mm and % of the robot's length, forces in mN."""
-    from ..discretisation.measurements import quantity_kind
+    """RMS of the differences (n, q) per kind: lengths in mm and % of the robot's length, forces
+    in mN, temperatures in K."""
     robot = fit.sim.robot
-    kinds = [quantity_kind(robot, name) for name in fit.data.names]
+    kinds = [fit.quantity_kind(name) for name in fit.data.names]
     out = {}
+    temperatures = difference[:, [k == "temperature" for k in kinds]]
+    if temperatures.size:
+        out["temperature_K"] = float(np.sqrt(np.mean(temperatures ** 2)))
     lengths = difference[:, [k == "length" for k in kinds]]
     if lengths.size:
         value = float(np.sqrt(np.mean(lengths ** 2)))

@@ -121,12 +121,16 @@ def test_cli_on_the_shipped_example(tmp_path, capsys):
 
 
 def test_shipped_dataset_is_what_the_script_makes(tmp_path):
-    """data/bending_module_measurements.csv is the output of scripts/make_fit_data.py (to the
-    digits it is written with)."""
+    """The shipped datasets are the output of scripts/make_fit_data.py (to the digits they are
+    written with)."""
     run = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_fit_data.py"), "-o", str(tmp_path / "m.csv")],
                          capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr
     assert (tmp_path / "m.csv").read_text() == (ROOT / "data" / "bending_module_measurements.csv").read_text()
+    run = subprocess.run([sys.executable, str(ROOT / "scripts" / "make_fit_data.py"), "--heating", "-o",
+                          str(tmp_path / "h.csv")], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert (tmp_path / "h.csv").read_text() == (ROOT / "data" / "bending_module_heating_curve.csv").read_text()
 
 
 @pytest.fixture
@@ -191,3 +195,73 @@ def test_profile_likelihood_agrees_with_the_wald_interval(sim):
     joint = both.run()
     profiled = both.profile(joint, E)
     assert profiled["interval_95"][1] - profiled["interval_95"][0] >= 0.99 * width
+
+
+HEATING = ROOT / "scenarios" / "bending_module_heating.yaml"
+C, G = "tca_types.nylon.thermal.heat_capacity", "tca_types.nylon.thermal.conductance"
+
+
+def test_heating_curve_model_is_the_closed_form():
+    """The time-series model at constants (C, G): a 0.3 W step from ambient at 1 s, off at 40 s,
+    follows T_amb + P/G (1 - exp(-(t - 1) G/C)) and then decays exponentially, to 1e-6 K."""
+    from tca_casadi.studies.thermal_fit import synthetic_heating_curve
+    sim = tc.Simulation.from_file(HEATING)
+    times = np.arange(0.0, 80.5, 2.0)
+    curve = synthetic_heating_curve(sim, {C: 0.16, G: 0.0065}, ["bending.tca2.temperature"], times, 1e-30)
+    tau, rise = 0.16 / 0.0065, 0.3 / 0.0065
+    heating = 25 + rise * (1 - np.exp(-np.clip(times - 1, 0, None) / tau))
+    peak = 25 + rise * (1 - np.exp(-39 / tau))
+    expected = np.where(times <= 40, heating, 25 + (peak - 25) * np.exp(-(times - 40) / tau))
+    assert_allclose(curve.values[:, 0], expected, rtol=0, atol=1e-6)
+
+
+def test_heating_curve_recovery_and_coverage():
+    """Twenty seeded heating curves (0.3 K noise): the 95 % intervals of C and G hold the truth
+    at least 34 times of 40 (about 38 expected; 36 here), the fitted values' errors in units of
+    their standard errors have mean within 0.5 of 0 and spread within 0.7-1.4."""
+    from tca_casadi.studies.thermal_fit import synthetic_heating_curve
+    sim = tc.Simulation.from_file(HEATING)
+    truth = {C: 0.16, G: 0.0065}
+    inside, z = 0, []
+    for seed in range(20):
+        curve = synthetic_heating_curve(sim, truth, ["bending.tca2.temperature"], np.arange(0.0, 80.5, 1.0), 0.3, seed)
+        result = Fit(sim, curve, list(truth), absolute_sigma=True).run()
+        for q, value in zip(result.parameters, truth.values()):
+            inside += q.low <= value <= q.high
+            z.append((q.value - value) / q.standard_error)
+    assert inside >= 34, inside
+    assert abs(np.mean(z)) < 0.5 and 0.7 < np.std(z) < 1.4
+
+
+def test_cli_fits_the_shipped_heating_curve(tmp_path, capsys):
+    out = tmp_path / "heating"
+    code = main(["fit", str(HEATING), "--data", str(ROOT / "data" / "bending_module_heating_curve.csv"),
+                 "--param", C, "--param", G, "-o", str(out), "--quiet"])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "a time series of 81 samples (1 quantity each)" in text and "time constant C/G" in text
+    report = json.loads((out / "fit.json").read_text())
+    for entry, value in zip(report["parameters"], (0.16, 0.0065)):
+        assert abs(entry["value"] - value) < 3 * entry["standard_error"], entry     # C is 2.5 SE off: chance
+    assert_allclose(report["rms"]["after"]["temperature_K"], 0.3, rtol=0.2)
+    fitted = yaml.safe_load((out / "fitted.yaml").read_text())
+    assert fitted["tca_types"]["nylon"]["thermal"]["conductance"] == pytest.approx(report["parameters"][1]["value"])
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--param", "materials.ecoflex30.youngs_modulus"], "a time-series fit takes a TCA type's thermal constants"),
+    (["--param", C, "--sigma", "temperature=-1"], "positive"),
+])
+def test_heating_bad_input(tmp_path, capsys, args, message):
+    code = main(["fit", str(HEATING), "--data", str(ROOT / "data" / "bending_module_heating_curve.csv")] + args
+                + ["-o", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and err.count("\n") == 1, err
+
+
+def test_heating_curve_column_that_is_not_a_temperature(tmp_path, capsys):
+    bad = tmp_path / "curve.csv"
+    bad.write_text("t [s],tip_x [mm]\n0,1\n1,2\n")
+    code = main(["fit", str(HEATING), "--data", str(bad), "--param", C, "-o", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2 and "column 'tip_x [mm]' of a time series" in err, err

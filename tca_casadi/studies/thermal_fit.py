@@ -1,0 +1,236 @@
+"""Calibration in time: a TCA type's thermal constants from a heating curve.
+
+A measurement file with a ``t [s]`` column is a time series of the scenario's own timeline
+(its drives and events, as ``simulate`` runs them): each row a time, the measured columns TCA
+temperatures, ``ACTUATOR.temperature [degC]`` (or ``[K]``), with optional ``sigma_`` columns
+(default ``temperature=0.5`` K, ``--sigma temperature=...``). The fitted parameters are the lumped
+thermal model's constants, ``tca_types.TYPE.thermal.heat_capacity`` [J/K] and
+``.conductance`` [W/K] (their nominal values the scenario's, or those derived from the fibre);
+the time constant is ``tau = C / G``. Every prediction integrates the thermal model
+(:func:`~tca_casadi.solvers.thermal.integrate`, rtol 1e-11) at the data's times; the Jacobian is
+by central differences of relative step :data:`STEP` (the thermal ODE is not part of the
+collocation NLP, so there is no implicit-function derivative to take; the integrator's
+tolerance keeps the differences to about 1e-6).
+"""
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ScenarioError
+from ..units import ureg
+from .fit import _cell, _split_unit as _split
+
+#: relative step of the central differences
+STEP = 1e-5
+#: default standard deviation of a measured temperature [K]
+TEMPERATURE_SIGMA = 0.5
+THERMAL_KEYS = ("heat_capacity", "conductance")
+UNITS = {"heat_capacity": "J/K", "conductance": "W/K"}
+
+
+def is_time_series(path):
+    """True if a measurement CSV has a time column ``t``."""
+    header = _header(Path(path))
+    return any(_split(text)[0] == "t" for text in header)
+
+
+def _header(path):
+    with open(path, newline="") as stream:
+        for row in csv.reader(line for line in stream if line.strip() and not line.lstrip().startswith("#")):
+            return row
+    return []
+
+
+@dataclass
+class HeatingCurve:
+    """Measured TCA temperatures in time: ``times`` (n,) [s], ``names`` (``ACTUATOR.temperature``),
+    ``values`` and ``sigmas`` (n, q) [degC, K]."""
+    times: np.ndarray
+    names: list
+    values: np.ndarray
+    sigmas: np.ndarray
+    source: str = "<data>"
+    inputs: tuple = ()
+
+    @property
+    def size(self):
+        return self.times.size
+
+
+def read_heating_curve(path, robot, sigma=None):
+    """A :class:`HeatingCurve` from a CSV; one-line ScenarioErrors naming the column or row."""
+    path = Path(path)
+    with open(path, newline="") as stream:
+        rows = list(csv.reader(line for line in stream if line.strip() and not line.lstrip().startswith("#")))
+    header, records = rows[0], rows[1:]
+    if not records:
+        raise ScenarioError(f"fit --data: {path} has a header but no rows")
+    keys = [a.key for a in robot.tcas]
+    time_column, measured, sigmas = None, [], {}
+    for column, text in enumerate(header):
+        name, unit = _split(text)
+        if name == "t":
+            time_column = (column, unit or "s", text)
+        elif name.startswith("sigma_"):
+            sigmas[name[len("sigma_"):]] = (column, unit, text)
+        elif name.endswith(".temperature") and name.rsplit(".", 1)[0] in keys:
+            measured.append((name, column, unit, text))
+        else:
+            raise ScenarioError(f"fit --data: column {text!r} of a time series (it has a t column) must be a TCA's "
+                                f"temperature ({', '.join(k + '.temperature' for k in keys)}) or its sigma_")
+    if not measured:
+        raise ScenarioError(f"fit --data: {path} has a t column but no measured temperature column")
+    times = np.array([_value(r[time_column[0]], time_column[1], "s", time_column[2], k)
+                      for k, r in enumerate(records, start=2)])
+    if np.any(np.diff(times) <= 0) or times[0] < 0:
+        raise ScenarioError(f"fit --data: the t column of {path} must start at 0 or later and increase")
+    values = np.column_stack([[_value(r[column], unit or "degC", "degC", text, k) for k, r in enumerate(records, start=2)]
+                              for _, column, unit, text in measured])
+    spread = np.full(values.shape, float(sigma or TEMPERATURE_SIGMA))
+    for j, (name, *_) in enumerate(measured):
+        if name in sigmas:
+            column, unit, text = sigmas[name]
+            spread[:, j] = [_value(r[column], unit or "K", "K", text, k, difference=True)
+                            for k, r in enumerate(records, start=2)]
+    if not np.all(spread > 0):
+        raise ScenarioError("fit --data: every sigma must be positive")
+    return HeatingCurve(times, [m[0] for m in measured], values, spread, str(path))
+
+
+def _value(cell, unit, target, column, row, difference=False):
+    value = _cell(cell, column, row)
+    try:
+        if difference:                  # a temperature difference: K and degC steps alike
+            unit = {"degC": "K", "°C": "K"}.get(unit, unit)
+        return float(ureg.Quantity(value, unit).to(target).magnitude)
+    except Exception:
+        raise ScenarioError(f"fit --data: column {column!r}: [{unit}] is not a unit of {target}") from None
+
+
+@dataclass
+class ThermalParameter:
+    """A fitted thermal constant: ``tca_types.TYPE.thermal.KEY``."""
+    path: str
+    tca_type: str
+    key: str
+
+    @property
+    def unit(self):
+        return UNITS[self.key]
+
+    @property
+    def name(self):
+        return self.path
+
+    @property
+    def label(self):
+        return f"{self.path} [{self.unit}]"
+
+    def to_si(self, value, what="value"):
+        from ..units import to_si
+        try:
+            return to_si(value, "heat_capacity" if self.key == "heat_capacity" else "thermal_conductance")
+        except ValueError as exc:
+            raise ScenarioError(f"{what} for {self.path}: {exc}") from None
+
+
+def thermal_parameter(scenario, path):
+    """The :class:`ThermalParameter` of ``path``; ScenarioError naming what a time-series fit takes."""
+    parts = path.split(".")
+    if len(parts) == 4 and parts[0] == "tca_types" and parts[2] == "thermal" and parts[3] in THERMAL_KEYS \
+            and parts[1] in scenario.tca_types:
+        return ThermalParameter(path, parts[1], parts[3])
+    types = ", ".join(f"tca_types.{t}.thermal.{k}" for t in scenario.tca_types for k in THERMAL_KEYS)
+    raise ScenarioError(f"fit --param {path}: a time-series fit takes a TCA type's thermal constants ({types})")
+
+
+class ThermalFitModel:
+    """Predicted temperatures of a heating curve at thermal constants ``theta`` (same interface
+    as :class:`~tca_casadi.studies.fit.FitModel`)."""
+
+    def __init__(self, sim, data, parameters):
+        self.sim, self.data, self.parameters = sim, data, parameters
+        self.raw = sim.scenario._raw if sim.scenario._raw is not None else sim.scenario.model_dump(mode="json")
+        self.nominal = np.array([self._nominal(p) for p in parameters])
+        self._cache = (None, None)
+
+    def _nominal(self, parameter):
+        from ..model.thermal import thermal_law
+        tca = next((a for a in self.sim.robot.tcas if a.tca_type == parameter.tca_type), None)
+        if tca is None:
+            raise ScenarioError(f"fit --param {parameter.path}: no TCA of type {parameter.tca_type}")
+        law = thermal_law(self.sim.scenario.tca_types[parameter.tca_type], tca.law.fiber_length)
+        return law.heat_capacity if parameter.key == "heat_capacity" else law.conductance
+
+    def predictions(self, theta, rows=None):
+        """Temperatures (n, q) [degC] at the data's times."""
+        key = np.asarray(theta, float).tobytes()
+        if self._cache[0] != key:
+            self._cache = (key, self._run(theta))
+        out = self._cache[1]
+        return out if rows is None else out[np.asarray(rows, int)]
+
+    def _run(self, theta):
+        from ..scenario.loader import load_scenario
+        from ..simulation import Simulation
+        from ..solvers.thermal import integrate, steady_state
+        from .timeline import TimeSimulation
+        if not np.all(np.asarray(theta) > 0):
+            from ..errors import TcaError
+            raise TcaError("a thermal constant reached zero")
+        overrides = {p.path: float(v) for p, v in zip(self.parameters, theta)}
+        sim = Simulation(load_scenario(self.raw, overrides))
+        timed = TimeSimulation(sim, duration=max(float(self.data.times[-1]), 1e-9))
+        keys = [a.key for a in timed.heated]
+        ambient = sim.scenario.ambient_temperature
+        drives = timed.drives()
+        initial = steady_state(timed.laws, drives, ambient, timed.coupling)
+        history = integrate(timed.laws, drives, ambient, initial, self.data.times, timed.coupling)
+        out = np.empty((self.data.size, len(self.data.names)))
+        for j, name in enumerate(self.data.names):
+            key = name.rsplit(".", 1)[0]
+            if key not in keys:
+                raise ScenarioError(f"fit --data: {name} is measured, but {key} has no power, voltage, current or "
+                                    "setpoint drive in the scenario: its temperature is set, not predicted")
+            out[:, j] = history.temperature[:, keys.index(key)]
+        return out
+
+    def residuals(self, theta, rows):
+        rows = np.asarray(rows, int)
+        if rows.size == 0:
+            return np.zeros(0)
+        return ((self.data.values[rows] - self.predictions(theta, rows)) / self.data.sigmas[rows]).ravel()
+
+    def jacobian(self, theta, rows):
+        """Central differences of the weighted residuals (relative step :data:`STEP`)."""
+        theta = np.asarray(theta, float)
+        columns = []
+        for j in range(theta.size):
+            step = STEP * abs(theta[j])
+            plus, minus = theta.copy(), theta.copy()
+            plus[j] += step
+            minus[j] -= step
+            columns.append((self.residuals(plus, rows) - self.residuals(minus, rows)) / (2 * step))
+        return np.column_stack(columns)
+
+
+def synthetic_heating_curve(sim, truth, names, times, noise, seed=0):
+    """A heating curve made by the model at the thermal constants ``truth`` (``{path: value}``)
+    with Gaussian noise ``noise`` [K] (seeded): a :class:`HeatingCurve`."""
+    curve = HeatingCurve(np.asarray(times, float), list(names), np.zeros((len(times), len(names))),
+                         np.full((len(times), len(names)), float(noise)), "<synthetic>")
+    parameters = [thermal_parameter(sim.scenario, path) for path in truth]
+    model = ThermalFitModel(sim, curve, parameters)
+    clean = model.predictions(np.array(list(truth.values()), float))
+    curve.values = clean + noise * np.random.default_rng(seed).standard_normal(clean.shape)
+    return curve
+
+
+def write_heating_curve(path, curve, comments=()):
+    from ..output import write_csv
+    header = ["t [s]"] + [f"{n} [degC]" for n in curve.names] + [f"sigma_{n} [K]" for n in curve.names]
+    rows = [[f"{t:.10g}"] + [f"{v:.10g}" for v in values] + [f"{s:.6g}" for s in sigma]
+            for t, values, sigma in zip(curve.times, curve.values, curve.sigmas)]
+    return write_csv(path, header, rows, comments=comments)
