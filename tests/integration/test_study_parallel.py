@@ -88,3 +88,15 @@ def test_a_killed_pool_process_loses_no_sample(scenarios):
     serial = _study(scenarios, 160).run()
     assert_allclose(result.frame[TIP].to_numpy(float), serial.frame[TIP].to_numpy(float), rtol=0, atol=1e-9)
     assert np.all(result.frame["balance [-]"] < 1e-9)
+
+
+def test_cli_on_the_cluster(scenarios, cluster, tmp_path, capsys):
+    """``tca-casadi study --scheduler ADDRESS``: the same command on the cluster."""
+    from tca_casadi.cli import main
+    code = main(["study", str(scenarios / "bending_module.yaml"), "--vary", "bending.tca2.temperature=25:125:4",
+                 "--vary", "bending.tca3.temperature=25:125:3", "--scheduler", cluster.scheduler_address,
+                 "-o", str(tmp_path), "--quiet", "--no-plot"])
+    assert code == 0
+    assert "12 samples (grid), 12 converged" in capsys.readouterr().out
+    info = __import__("json").loads((tmp_path / "study.json").read_text())
+    assert info["ran_on"] == f"dask: {cluster.scheduler_address}" and info["workers"] == 2
