@@ -94,8 +94,8 @@ class Study:
         a path that is neither."""
         try:
             return resolve_parameter(self.sim.robot, self.sim.params, path)
-        except ScenarioError as exc:
-            parameter_error = exc
+        except ScenarioError:
+            pass
         raw = self._raw()
         from ..scenario.loader import validate
         from ..scenario.overrides import apply_overrides
@@ -103,9 +103,9 @@ class Study:
         try:
             validate(apply_overrides(raw, {path: _plain(probe[0]) if len(probe) else 0}), SourceMap("<study>"))
         except ScenarioError as exc:
-            text = str(exc).splitlines()[0]
-            raise ScenarioError(f"study: {path!r} is not a parameter ({parameter_error}) and setting it "
-                                f"fails ({text})") from None
+            text = str(exc).splitlines()[0].replace("<study>: ", "")
+            raise ScenarioError(f"study: {path!r} is neither a parameter nor a scenario value ({text}); "
+                                "`tca-casadi validate` lists the parameters") from None
         return None
 
     def _axis(self, path, spec):

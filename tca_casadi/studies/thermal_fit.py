@@ -31,8 +31,11 @@ UNITS = {"heat_capacity": "J/K", "conductance": "W/K"}
 
 
 def is_time_series(path):
-    """True if a measurement CSV has a time column ``t``."""
-    header = _header(Path(path))
+    """True if a measurement CSV has a time column ``t`` (ScenarioError if it is not a file)."""
+    path = Path(path)
+    if not path.is_file():
+        raise ScenarioError(f"fit --data: {path} is not a file")
+    header = _header(path)
     return any(_split(text)[0] == "t" for text in header)
 
 

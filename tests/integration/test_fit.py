@@ -166,6 +166,13 @@ def test_bad_input_is_one_line_exit_2(data_file, tmp_path, capsys, change, args,
     assert code == 2 and message in err and err.count("\n") == 1, err
 
 
+def test_missing_data_file_is_exit_2(tmp_path, capsys):
+    code = main(["fit", str(ROOT / "scenarios" / "bending_module.yaml"), "--data", str(tmp_path / "none.csv"),
+                 "--param", E, "-o", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2 and "none.csv is not a file" in err and err.count("\n") == 1, err
+
+
 def test_nan_row_names_its_row(data_file, tmp_path, capsys):
     lines = data_file.read_text().splitlines()
     cells = lines[2].split(",")

@@ -169,7 +169,9 @@ def test_cli_writes_every_file(bending, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--vary", "bending.tca9.temperature=25:125"], "not a parameter"),
+    (["--vary", "bending.tca9.temperature=25:125"], "neither a parameter nor a scenario value"),
+    (["--vary", "bending.lenght=40mm:50mm:2"], "did you mean 'length'"),
+    (["--rows", "missing.csv"], "is not a file"),
     (["--vary", "bending.tca2.temperature=100:100"], "empty"),
     (["--vary", "bending.tca2.temperature=125:25"], "empty"),
     (["--vary", "bending.tca2.temperature=25:125:-2"], "points"),
