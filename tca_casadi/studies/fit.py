@@ -308,14 +308,15 @@ class Fit:
         def jacobian(x):
             return model.jacobian(x * self.scale, train) * self.scale[None, :]
 
-        best = None
+        best, failed = None, []
         for start in self._starts(x0, lower, upper):
             try:
                 fitted = least_squares(residuals, start, jac=jacobian, bounds=(lower, upper), method="trf",
                                        x_scale=1.0, xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200)
             except TcaError as exc:
-                if best is None and start is x0:
+                if start is x0:
                     raise TcaError(f"fit: {exc}") from None
+                failed.append(str(exc))            # said in the result's warnings
                 continue
             if best is None or fitted.cost < best.cost:
                 best = fitted
@@ -326,7 +327,10 @@ class Fit:
         J = model.jacobian(theta, train)                       # d r / d theta (r weighted)
         test = model.residuals(theta, self.test) if self.test.size else None
         from .fit_result import FitResult
-        return FitResult.build(self, theta, best, before, after, J, test, time.perf_counter() - started)
+        result = FitResult.build(self, theta, best, before, after, J, test, time.perf_counter() - started)
+        if failed:
+            result.warnings.append(f"{len(failed)} of {self.starts} starts failed (the first: {failed[0]})")
+        return result
 
     def profile(self, result, path, points=9, span=3.0):
         """The profile likelihood of one fitted parameter: at ``points`` values within ``span``
@@ -486,6 +490,7 @@ def synthetic_measurements(sim, truth, inputs, names, noise, seed=0):
     SI, seeded). A :class:`Measurements` whose sigmas are the noise's."""
     from ..simulation import Simulation
     model_sim = Simulation(sim.scenario)
+    model_sim.solve(warn=False)                  # the mesh a fit of these data uses (accuracy control)
     params = model_sim.params.copy()
     for path, value in truth.items():
         params = resolve_parameter(model_sim.robot, params, path).with_value(params, value)

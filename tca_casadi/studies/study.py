@@ -69,6 +69,8 @@ class Study:
         self.sim, self.outputs, self.seed = sim, list(outputs), int(seed)
         self.kinds = {}                  # path -> StudyParameter, or None for a structural path
         self.units = {}                  # structural path -> SI unit symbol, where given with one
+        self._meshes = {}                # structure -> (meshes, degree), fixed in this process
+        self.nominal = None              # the Simulation solved at the scenario's own values
         if rows is not None and vary:
             raise ScenarioError("study: give varied paths or rows, not both")
         if rows is not None:
@@ -187,8 +189,6 @@ class Study:
     def _mesh(self, structure):
         """``(meshes, degree)`` of a structure: its collocation solver's after one cold,
         accuracy-controlled solve at the scenario's values (None for shooting)."""
-        if not hasattr(self, "_meshes"):
-            self._meshes = {}
         key = json.dumps(structure, sort_keys=True)
         if key not in self._meshes:
             from ..simulation import Simulation
@@ -227,7 +227,8 @@ class Study:
         started = time.perf_counter()
         stream = _Stream(directory, self.plan_hash(), resume, self.design.size)
         rows = dict(stream.rows)
-        count = {"serial": 1, "processes": target}.get(kind) or _dask_workers(target) or 2
+        cluster = _dask_workers(target) if kind == "dask" else None
+        count = {"serial": 1, "processes": target}.get(kind) or cluster or 2
         todo = [c for c in (_without(c, rows) for c in self.chunks(count)) if c.ids]
         total, resumed = self.design.size, len(rows)
         clock = {"start": time.perf_counter()}
@@ -264,7 +265,7 @@ class Study:
             run_dask(todo, finished, target, lost)
         from .study_result import StudyResult
         return StudyResult.from_rows(self, [rows[i] for i in sorted(rows)], {
-            "ran_on": describe(kind, target), "workers": target if kind != "dask" else _dask_workers(target),
+            "ran_on": describe(kind, target), "workers": target if kind != "dask" else cluster,
             "wall_time_s": time.perf_counter() - started, "resumed_samples": resumed}, stream)
 
     def local_sensitivities(self):
@@ -273,7 +274,7 @@ class Study:
         if self.structural or not self.parameters:
             return None
         self._mesh({})
-        nominal = getattr(self, "nominal", None)
+        nominal = self.nominal
         solution = nominal.last if nominal is not None else None
         if solution is None or not solution.converged or "w" not in solution.raw:
             return None
@@ -329,15 +330,15 @@ def _without(chunk, rows):
 
 
 def _dask_workers(target):
+    """The number of workers of the Dask cluster at ``target`` (ScenarioError if it does not
+    answer)."""
+    from .executors import connect
+    client, owned = connect(target)
     try:
-        from .executors import connect
-        client, owned = connect(target)
-        count = len(client.scheduler_info().get("workers", {}))
+        return len(client.scheduler_info().get("workers", {})) or None
+    finally:
         if owned:
             client.close()
-        return count
-    except (ScenarioError, OSError):
-        return None
 
 
 def _plain(value, units=None, path=None):

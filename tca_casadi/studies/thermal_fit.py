@@ -154,18 +154,35 @@ class ThermalFitModel:
     as :class:`~tca_casadi.studies.fit.FitModel`)."""
 
     def __init__(self, sim, data, parameters):
+        from .timeline import TimeSimulation
         self.sim, self.data, self.parameters = sim, data, parameters
-        self.raw = sim.scenario._raw if sim.scenario._raw is not None else sim.scenario.model_dump(mode="json")
+        self.timed = TimeSimulation(sim, duration=max(float(data.times[-1]), 1e-9))     # built once
+        keys = [a.key for a in self.timed.heated]
+        for name in data.names:
+            key = name.rsplit(".", 1)[0]
+            if key not in keys:
+                raise ScenarioError(f"fit --data: {name} is measured, but {key} has no power, voltage, current or "
+                                    "setpoint drive in the scenario: its temperature is set, not predicted")
+        self.columns = [keys.index(name.rsplit(".", 1)[0]) for name in data.names]
         self.nominal = np.array([self._nominal(p) for p in parameters])
         self._cache = (None, None)
 
     def _nominal(self, parameter):
-        from ..model.thermal import thermal_law
-        tca = next((a for a in self.sim.robot.tcas if a.tca_type == parameter.tca_type), None)
-        if tca is None:
-            raise ScenarioError(f"fit --param {parameter.path}: no TCA of type {parameter.tca_type}")
-        law = thermal_law(self.sim.scenario.tca_types[parameter.tca_type], tca.law.fiber_length)
-        return law.heat_capacity if parameter.key == "heat_capacity" else law.conductance
+        """The constant's value in the scenario: that of the first heated TCA of its type."""
+        index = next((k for k, a in enumerate(self.timed.heated) if a.tca_type == parameter.tca_type), None)
+        if index is None:
+            raise ScenarioError(f"fit --param {parameter.path}: no heated TCA (with a power, voltage, current or "
+                                f"setpoint drive) is of type {parameter.tca_type}")
+        return getattr(self.timed.laws[index], parameter.key)
+
+    def laws_at(self, theta):
+        """The heated TCAs' thermal laws with the constants ``theta`` for their types."""
+        from dataclasses import replace
+        laws = list(self.timed.laws)
+        for parameter, value in zip(self.parameters, theta):
+            laws = [replace(law, **{parameter.key: float(value)}) if actuator.tca_type == parameter.tca_type else law
+                    for actuator, law in zip(self.timed.heated, laws)]
+        return laws
 
     def predictions(self, theta, rows=None):
         """Temperatures (n, q) [degC] at the data's times."""
@@ -176,29 +193,16 @@ class ThermalFitModel:
         return out if rows is None else out[np.asarray(rows, int)]
 
     def _run(self, theta):
-        from ..scenario.loader import load_scenario
-        from ..simulation import Simulation
         from ..solvers.thermal import integrate, steady_state
-        from .timeline import TimeSimulation
         if not np.all(np.asarray(theta) > 0):
             from ..errors import TcaError
             raise TcaError("a thermal constant reached zero")
-        overrides = {p.path: float(v) for p, v in zip(self.parameters, theta)}
-        sim = Simulation(load_scenario(self.raw, overrides))
-        timed = TimeSimulation(sim, duration=max(float(self.data.times[-1]), 1e-9))
-        keys = [a.key for a in timed.heated]
-        ambient = sim.scenario.ambient_temperature
+        laws, timed = self.laws_at(theta), self.timed
+        ambient = self.sim.scenario.ambient_temperature
         drives = timed.drives()
-        initial = steady_state(timed.laws, drives, ambient, timed.coupling)
-        history = integrate(timed.laws, drives, ambient, initial, self.data.times, timed.coupling)
-        out = np.empty((self.data.size, len(self.data.names)))
-        for j, name in enumerate(self.data.names):
-            key = name.rsplit(".", 1)[0]
-            if key not in keys:
-                raise ScenarioError(f"fit --data: {name} is measured, but {key} has no power, voltage, current or "
-                                    "setpoint drive in the scenario: its temperature is set, not predicted")
-            out[:, j] = history.temperature[:, keys.index(key)]
-        return out
+        initial = steady_state(laws, drives, ambient, timed.coupling)
+        history = integrate(laws, drives, ambient, initial, self.data.times, timed.coupling)
+        return history.temperature[:, self.columns]
 
     def residuals(self, theta, rows):
         rows = np.asarray(rows, int)
