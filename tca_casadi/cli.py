@@ -76,7 +76,7 @@ def build_parser():
                        help="smallest step, as a fraction of the range, before a run stops (default 1e-4)")
     _output_arguments(sweep, "sweep", "sweep.png and sweep_robots.png")
 
-    inverse = commands.add_parser("inverse", help="inverse statics: TCA temperatures for a target tip pose")
+    inverse = commands.add_parser("inverse", help="inverse statics: TCA temperatures (or other muscles' inputs) for a target tip pose")
     _scenario_arguments(inverse)
     inverse.add_argument("--target-position", nargs=3, metavar=("X", "Y", "Z"),
                          help="target position [m] (or with units, '12 mm'); default: the scenario's inverse.target")
@@ -87,9 +87,11 @@ def build_parser():
                        help="also match this orientation (quaternion) of the point's frame")
     inverse.add_argument("--point", default=None, help="'tip' (default) or a module name (its end)")
     inverse.add_argument("--vary", action="append", default=None, metavar="PATH",
-                         help="temperature to vary (repeatable; default: every TCA)")
+                         help="input to vary: a TCA or SMA temperature, a McKibben pressure... "
+                              "(repeatable; default: every muscle's)")
     inverse.add_argument("--bounds", nargs=2, metavar=("LO", "HI"),
-                         help="temperature bounds [degC] (default: each TCA type's reference to max temperature)")
+                         help="bounds of the inputs, in their units (degC, Pa; default: each TCA or SMA "
+                              "type's reference to max temperature, 0 to a McKibben type's max_pressure)")
     inverse.add_argument("--tolerance", default=None, metavar="M",
                          help="position error under which the target counts as reached (default 0.1 mm)")
     inverse.add_argument("--starts", type=int, default=None, help="initial temperature sets tried (default 4)")
@@ -219,7 +221,8 @@ def _validate(args):
     scenario = load_scenario(Path(args.scenario), args.overrides)
     robot = Robot.from_scenario(scenario)
     print(f"{args.scenario}: valid scenario {scenario.name!r}: {len(robot.modules)} module(s), "
-          f"{len(robot.tcas)} TCA(s), {len(robot.actuators) - len(robot.tcas)} tendon(s), "
+          f"{len(robot.tcas)} TCA(s), {_other_muscles(robot)}"
+          f"{sum(a.kind == 'tendon' for a in robot.actuators)} tendon(s), "
           f"{len(scenario.loads)} load(s), {len(scenario.objects)} object(s); tip: "
           f"{robot.modules[robot.tip_index].name}")
     import numpy as np
@@ -234,13 +237,19 @@ def _validate(args):
     return 0
 
 
+def _other_muscles(robot):
+    """``"3 sma muscle(s), "`` for every muscle kind but the TCA ("" if none)."""
+    kinds = [a.kind for a in robot.muscles if a.kind != "tca"]
+    return "".join(f"{kinds.count(k)} {k} muscle(s), " for k in dict.fromkeys(kinds))
+
+
 def _print_thermal(scenario, robot):
     """Each TCA's lumped thermal model (heat capacity, conductance, time constant)."""
-    from .model.thermal import thermal_law
-    if robot.tcas:
+    from .model.laws import thermal_kinds
+    if robot.thermal_actuators:
         print(f"thermal (ambient {scenario.ambient_temperature:g} degC):")
-    for actuator in robot.tcas:
-        law = thermal_law(scenario.tca_types[actuator.tca_type], actuator.law.fiber_length)
+    for actuator in robot.thermal_actuators:
+        law = actuator.thermal_law(scenario)
         resistance = "" if law.resistance != law.resistance else f", R0 {law.resistance:.4g} ohm"
         print(f"  {actuator.key:<28} C {law.heat_capacity:.4g} J/K, G {law.conductance:.4g} W/K, "
               f"tau {law.time_constant:.3g} s{resistance}")
@@ -254,7 +263,7 @@ def _print_thermal(scenario, robot):
         print(f"dynamics ({scenario.dynamics.integrator}, {text}): time scale sqrt(rho A L^4 / EI): {scales}")
     for module in scenario.modules:
         if module.thermal_coupling is not None:
-            names = [a.name for a in module.actuators if a.kind == "tca"]
+            names = [a.name for a in module.actuators if a.kind in thermal_kinds()]
             pairs = module.thermal_coupling.between or [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]
             print(f"  {module.name}: {module.thermal_coupling.conductance:.4g} W/K between "
                   + ", ".join(f"{a}-{b}" for a, b in pairs))

@@ -247,7 +247,7 @@ def _warm_steps(solver, rest, target, solution, first_step, min_step):
 
 def _needs_continuation(solution):
     return (not solution.converged) or any(
-        a.kind == "tca" and not a.tension_only and a.tension < 0 for a in solution.actuators.values())
+        a.kind != "tendon" and not a.tension_only and a.tension < 0 for a in solution.actuators.values())
 
 
 def _better(first, second):

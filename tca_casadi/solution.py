@@ -57,14 +57,13 @@ class ActuatorResult:
     tension_only: bool = False
     displacement: Optional[float] = None  # q [m], displacement-controlled tendons
     slack_length: Optional[float] = None  # [m] tension_only actuators (0 when taut)
+    pressure: Optional[float] = None      # [Pa] McKibben muscles
+    input: Optional[float] = None         # a custom law's input (SI)
+    heated: bool = False                  # its law calls the input active (heated, pressurised)
 
     @property
     def stroke(self):
         return self.length - self.reference_length
-
-    @property
-    def heated(self):
-        return self.kind == "tca" and self.temperature > self.reference_temperature + 0.5
 
     @property
     def slack(self):
@@ -72,7 +71,8 @@ class ActuatorResult:
 
     def as_dict(self):
         return {"kind": self.kind, "control": self.control, "temperature": self.temperature,
-                "displacement": self.displacement, "tension": self.tension,
+                "displacement": self.displacement, "pressure": self.pressure, "input": self.input,
+                "tension": self.tension,
                 "length": self.length, "reference_length": self.reference_length,
                 "stroke": self.stroke, "free_stroke": self.free_stroke,
                 "tension_only": self.tension_only, "slack_length": self.slack_length}
@@ -215,12 +215,18 @@ class Solution:
                  f"  tip position [mm]: {signed(tip[0])} {signed(tip[1])} {signed(tip[2])}",
                  f"  {'actuator':<22}{'T [degC]':>9}{'q [mm]':>8}{'F [mN]':>11}{'stroke [mm]':>13}"
                  f"{'free [mm]':>11}{'slack [mm]':>12}"]
+        extra = [(name, label, scale) for name, label, scale in
+                 (("pressure", "P [kPa]", 1e-3), ("input", "input", 1.0))
+                 if any(getattr(a, name) is not None for a in self.actuators.values())]
+        lines[-1] += "".join(f"{label:>11}" for _, label, _ in extra)
         for key, a in self.actuators.items():
             temp = f"{a.temperature:9.1f}" if a.temperature is not None else f"{'-':>9}"
             pull = f"{a.displacement * 1e3:8.3f}" if a.displacement is not None else f"{'-':>8}"
             free = f"{a.free_stroke * 1e3:11.4f}" if a.free_stroke is not None else f"{'-':>11}"
             slack = f"{a.slack_length * 1e3:12.4f}" if a.slack_length is not None else f"{'-':>12}"
-            lines.append(f"  {key:<22}{temp}{pull}{a.tension * 1e3:11.4f}{a.stroke * 1e3:13.4f}{free}{slack}")
+            more = "".join(f"{getattr(a, name) * scale:11.5g}" if getattr(a, name) is not None else f"{'-':>11}"
+                           for name, _, scale in extra)
+            lines.append(f"  {key:<22}{temp}{pull}{a.tension * 1e3:11.4f}{a.stroke * 1e3:13.4f}{free}{slack}{more}")
         lines += [f"  warning: {w}" for w in self.warnings]
         if not self.converged and not self.warning_texts("not_converged"):
             lines.append(f"  message: {self.message}")

@@ -36,6 +36,8 @@ KINDS = {
     "heat_transfer_coefficient": ("W/(m^2*K)", "a heat transfer coefficient"),
     "resistance": ("ohm", "an electrical resistance"),
     "per_kelvin": ("1/K", "a temperature coefficient"),
+    "resistivity": ("ohm*m", "an electrical resistivity"),
+    "pressure_per_kelvin": ("Pa/K", "a stress per kelvin"),
     "power": ("W", "a power"),
     "voltage": ("V", "a voltage"),
     "current": ("A", "a current"),
@@ -55,7 +57,7 @@ UNIT_OF = {"temperature": "degC", "force": "N", "moment": "N m", "mass": "kg", "
            "untwist_c2": "rad/(m degC^2)", "untwist_c1": "rad/(m degC)", "untwist_c0": "rad/m",
            "dimensionless": "-", "heat_capacity": "J/K", "thermal_conductance": "W/K",
            "specific_heat": "J/(kg K)", "heat_transfer_coefficient": "W/(m^2 K)", "resistance": "ohm",
-           "per_kelvin": "1/K", "power": "W", "voltage": "V", "current": "A", "time": "s",
+           "per_kelvin": "1/K", "resistivity": "ohm m", "pressure_per_kelvin": "Pa/K", "power": "W", "voltage": "V", "current": "A", "time": "s",
            "integral_gain": "W/(K s)"}
 
 _NUMBER_AND_UNIT = re.compile(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*)", re.DOTALL)

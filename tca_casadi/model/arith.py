@@ -26,6 +26,14 @@ def sqrt(x):
     return _casadi().sqrt(x) if is_casadi(x) else np.sqrt(x)
 
 
+def clip(x, low, high):
+    """``x`` clamped to ``[low, high]`` (CasADi ``fmin``/``fmax`` for symbols)."""
+    if is_casadi(x) or is_casadi(low) or is_casadi(high):
+        ca = _casadi()
+        return ca.fmin(ca.fmax(x, low), high)
+    return np.minimum(np.maximum(x, low), high)
+
+
 def vector(*items):
     """Column of the scalars ``items``: a CasADi column if any is symbolic, else a numpy array."""
     if any(is_casadi(item) for item in items):
@@ -58,4 +66,4 @@ def matmul(matrix, data):
     return matrix @ data
 
 
-__all__ = ["is_casadi", "cos", "sin", "sqrt", "vector", "placement_matrix", "matmul"]
+__all__ = ["is_casadi", "cos", "sin", "sqrt", "clip", "vector", "placement_matrix", "matmul"]

@@ -21,14 +21,17 @@ name                                                   what                     
 ``tca_types.T.reference_temperature``                  [degC]                    kept
 ``tca_types.T.untwist.c2|c1|c0``                       untwist fit [rad/m/degC^k] kept
 ``tca_types.T.shear_modulus.a2|a1|a0``                 modulus fit [Pa/N^k]      kept
+``muscle_types.T.KEY``                                 a muscle's constants      kept
+                                                       (its law's ``PARAMETERS``)
 ``MODULE.ACTUATOR.route.radius``, ``.angle``/``.phase``  straight and helix routes kept
 ``MODULE.TCA.temperature``                             [degC]                    its reference
+``MODULE.MUSCLE.temperature|pressure|input``           its law's input           its rest value
 ``MODULE.TENDON.tension`` / ``.displacement``          [N] / [m]                 zero
 ``OBJECT.mass``, ``OBJECT.held``                       [kg], 0 or 1              zero
 ``LOAD.mass`` or ``LOAD.force``, ``LOAD.moment``       [kg] or [N], [N m]        zero
 =====================================================  ========================  =============
 
-Only materials and TCA types that some module or actuator uses are declared.
+Only materials, TCA types and muscle types that some module or actuator uses are declared.
 """
 from dataclasses import dataclass
 
@@ -98,6 +101,9 @@ class ParameterLayout:
         for tca_type in data.get("tca_types", {}).values():
             for key in TCA_THERMAL:
                 tca_type.pop(key, None)
+        for muscle_type in data.get("muscle_types", {}).values():
+            for key in _muscle_law(muscle_type.get("kind")).THERMAL_KEYS:
+                muscle_type.pop(key, None)
         for module in data.get("modules", []):
             module.pop("thermal_coupling", None)       # simulate's, never the statics'
             for actuator in module.get("actuators", []):
@@ -132,6 +138,9 @@ def declare(scenario, actuators, point_loads, distributed):
     used = dict.fromkeys(a.type for m in scenario.modules for a in m.actuators if a.kind == "tca")
     for name in used:
         _tca_type(put, name, scenario.tca_types[name])
+    used = dict.fromkeys(a.type for m in scenario.modules for a in m.actuators if a.kind not in ("tca", "tendon"))
+    for name in used:
+        _muscle_type(put, name, scenario.muscle_types[name])
     for actuator in actuators:
         source, config = _actuator_source(scenario, actuator)
         for key in actuator.placement_keys:
@@ -139,8 +148,7 @@ def declare(scenario, actuators, point_loads, distributed):
                 source + ("route", key))
     for actuator in actuators:
         source, config = _actuator_source(scenario, actuator)
-        rest = f"tca_types.{config.type}.reference_temperature" if actuator.kind == "tca" else 0.0
-        kind = {"temperature": "temperature", "tension": "force", "displacement": "length"}[actuator.control]
+        rest, kind = _input_rest(actuator, config)
         put(actuator.parameter, getattr(config, actuator.control), kind, source + (actuator.control,), rest)
     for k, item in enumerate(scenario.objects):
         put(f"{item.name}.mass", item.mass, "mass", ("objects", k, "mass"), 0.0)
@@ -185,6 +193,34 @@ TCA_KEYS = {"fiber_radius": "length", "coil_radius": "length", "pitch_angle": "a
             "untwist.c2": "untwist_c2", "untwist.c1": "untwist_c1", "untwist.c0": "untwist_c0",
             "shear_modulus.a2": "pressure_per_force2", "shear_modulus.a1": "pressure_per_force",
             "shear_modulus.a0": "pressure"}
+
+
+def _input_rest(actuator, config):
+    """``(rest rule, unit kind)`` of an actuator's own parameter (its input or tension)."""
+    if actuator.kind == "tca":
+        return f"tca_types.{config.type}.reference_temperature", "temperature"
+    if actuator.kind == "tendon":
+        return 0.0, {"tension": "force", "displacement": "length"}[actuator.control]
+    law = actuator.law
+    rest = f"muscle_types.{config.type}.{law.REST_INPUT}" if law.REST_INPUT else law.INPUT[2]
+    return rest, law.INPUT[1]
+
+
+def _muscle_law(kind):
+    from .laws import muscles
+    return muscles()[kind]
+
+
+def _muscle_type(put, name, config):
+    """A muscle type's constants (its law's ``PARAMETERS``; a custom law's ``parameters``)."""
+    law = _muscle_law(config.kind)
+    if hasattr(law, "parameter_entries"):
+        entries = law.parameter_entries(config)
+    else:
+        entries = [(p.name, p.kind, getattr(config, p.name)) for p in law.PARAMETERS]
+    for key, kind, value in entries:
+        if value is not None:
+            put(f"muscle_types.{name}.{key}", value, kind, ("muscle_types", name) + tuple(key.split(".")))
 
 
 def _tca_type(put, name, tca_type):

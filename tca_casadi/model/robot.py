@@ -18,30 +18,31 @@ from typing import Optional
 import numpy as np
 
 from ..scenario.checks import fail, route_span
-from .compatibility import TendonLaw
+from .laws import muscle_module, muscles
+from .laws.tca import TcaLaw
+from .laws.tendon import TendonLaw
 from .parameters import ParameterLayout, declare  # noqa: F401  (ParameterLayout: re-exported)
 from .routes import ANGLE_KEY, make_route, reference_path_length
 from .sections import outside_point, section_properties, stiffness_diagonal
-from .tca_law import TcaLaw
 
 
 @dataclass
 class ActuatorModel:
-    """One actuator. ``kind`` is ``"tca"`` (tension unknown, fixed by its law) or ``"tendon"``;
-    a tendon's ``control`` is ``"tension"`` (given) or ``"displacement"`` (tension unknown, fixed
-    by its length condition). ``tension_only``: may go slack (F = 0)."""
+    """One actuator. ``kind`` is ``"tca"``, a muscle of ``muscle_types`` (``"sma"``,
+    ``"mckibben"``, ``"custom"``: tension unknown, fixed by its law at its input, ``control``) or
+    ``"tendon"``, whose ``control`` is ``"tension"`` (given) or ``"displacement"`` (tension
+    unknown, fixed by its length condition). ``tension_only``: may go slack (F = 0)."""
     name: str
     module: int
     kind: str
     route: object
-    law: Optional[object]     # TcaLaw, TendonLaw (displacement control) or None
+    law: Optional[object]     # an ActuatorLaw (model.laws) or None (a tendon of given tension)
     reference_length: float
-    parameter: str            # 'MODULE.NAME.temperature' | '.tension' | '.displacement'
+    parameter: str            # 'MODULE.NAME.temperature' | '.pressure' | '.tension' | ...
     control: str = "temperature"
     tension_only: bool = False
     xi_star: np.ndarray = None        # (6,) the module's reference strains (for l*)
-    tca_type: Optional[str] = None    # the TCA type's name
-    fiber_length_given: bool = False  # the type gives fiber_length (else l* / sin(alpha))
+    tca_type: Optional[str] = None    # the name of its type (tca_types or muscle_types)
 
     @property
     def key(self):
@@ -88,15 +89,37 @@ class ActuatorModel:
             cache[placement] = outside_point(section, self.route.moved(*placement)) is not None
         return cache[placement]
 
+    @property
+    def type_path(self):
+        """Where its type lives: ``tca_types.NAME`` or ``muscle_types.NAME`` (None: a tendon)."""
+        if self.tca_type is None:
+            return None
+        return f"{'tca_types' if self.kind == 'tca' else 'muscle_types'}.{self.tca_type}"
+
+    @property
+    def is_muscle(self):
+        """A TCA or a muscle of ``muscle_types`` (an input drives it; not a tendon)."""
+        return self.tca_type is not None
+
+    @property
+    def thermal(self):
+        """Heated by a drive in ``simulate`` (its input is a temperature with a thermal model)."""
+        return self.law is not None and self.law.THERMAL
+
     def law_of(self, param):
-        """The actuator's law (:class:`TcaLaw`, :class:`TendonLaw` or None) with its constants
-        read from the parameters."""
+        """The actuator's law (an :class:`~tca_casadi.model.laws.base.ActuatorLaw` or None) with
+        its constants read from the parameters."""
+        if self.law is None:
+            return None
+        prefix = f"{self.type_path}." if self.type_path else ""
+        return self.law.with_parameters(param, prefix, self.reference_length_of(param))
+
+    def thermal_law(self, scenario):
+        """Its lumped :class:`~tca_casadi.model.thermal.ThermalLaw` (``THERMAL`` laws only)."""
+        from .thermal import thermal_law
         if self.kind == "tca":
-            return TcaLaw.from_parameters(self.law, param, f"tca_types.{self.tca_type}.",
-                                          self.reference_length_of(param), self.fiber_length_given)
-        if isinstance(self.law, TendonLaw):
-            return TendonLaw(self.reference_length_of(param), self.law.compliance)
-        return self.law
+            return thermal_law(scenario.tca_types[self.tca_type], self.law.fiber_length)
+        return muscle_module(self.kind).thermal_law(scenario.muscle_types[self.tca_type], self.law)
 
     @property
     def unknown_tension(self):
@@ -231,8 +254,18 @@ class Robot:
 
     @property
     def tcas(self):
-        """Actuators whose tension is an unknown, in the order of the NLP's tension variables."""
+        """The TCAs, in scenario order."""
         return [a for a in self.actuators if a.kind == "tca"]
+
+    @property
+    def muscles(self):
+        """TCAs and other muscles (actuators driven by an input through their law), in order."""
+        return [a for a in self.actuators if a.is_muscle]
+
+    @property
+    def thermal_actuators(self):
+        """Muscles heated in ``simulate`` (TCAs, SMA wires), in order."""
+        return [a for a in self.actuators if a.thermal]
 
     @classmethod
     def from_scenario(cls, scenario):
@@ -325,12 +358,11 @@ class Robot:
                 cache.pop(next(iter(cache)))
             cache[key] = self._structural_problems(params)
         out = list(cache[key])
-        for actuator in self.tcas:           # the range is the type's, never a parameter
-            temperature = float(params[self.layout[actuator.parameter]][0])
-            low, high = actuator.law.min_temperature, actuator.law.max_temperature
-            if not low <= temperature <= high:
-                out.append(f"{actuator.key} at {temperature:.6g} degC is outside its TCA type's range "
-                           f"({low:g} to {high:g} degC, the range its law is validated for)")
+        for actuator in self.muscles:           # the range is the type's, never a parameter
+            problem = actuator.law.input_problem(actuator.parameter, float(params[self.layout[actuator.parameter]][0]),
+                                                 actuator.type_path)
+            if problem:
+                out.append(problem)
         return out
 
     def _structural_problems(self, params):
@@ -343,15 +375,8 @@ class Robot:
             if module.weight_density_of(param) < 0:
                 out.append(f"module {module.name}: the density must not be negative")
         for actuator in self.actuators:
-            if actuator.kind == "tca":
-                law = actuator.law_of(param)
-                if not 0 < law.fiber_radius < law.coil_radius:
-                    out.append(f"{actuator.key}: need 0 < fiber_radius < coil_radius "
-                               f"(got {law.fiber_radius:g} m and {law.coil_radius:g} m)")
-                if not 0 < law.pitch_angle < np.pi / 2:
-                    out.append(f"{actuator.key}: pitch_angle {law.pitch_angle:g} rad is outside (0, pi/2)")
-                if not law.shear_coefficients[2] > 0:
-                    out.append(f"{actuator.key}: shear_modulus.a0 must be positive")
+            if actuator.is_muscle:
+                out.extend(actuator.law_of(param).structural_problems(actuator.key))
             if actuator.placement_keys:
                 radius = actuator.placement_of(param)[0]
                 if radius < 0 or (radius == 0 and actuator.route.kind == "helix"):
@@ -390,6 +415,11 @@ def _actuator(scenario, index, config, a_index, a_config):
     if a_config.kind == "tca":
         tca_type = a_config.type
         law = TcaLaw.from_type(scenario.tca_types[a_config.type], reference_length)
+    elif a_config.kind in muscles():
+        tca_type = a_config.type
+        law = muscles()[a_config.kind].from_type(scenario.muscle_types[a_config.type], reference_length,
+                                                 folder=scenario_folder(scenario))
+        control = law.INPUT[0]
     else:
         control = a_config.control
         if control == "displacement":
@@ -397,9 +427,22 @@ def _actuator(scenario, index, config, a_index, a_config):
                 1.0 / a_config.stiffness if a_config.stiffness is not None else 0.0)
             law = TendonLaw(reference_length, compliance)
     parameter = f"{config.name}.{a_config.name}.{control}"
-    fiber_given = tca_type is not None and scenario.tca_types[tca_type].fiber_length is not None
     return ActuatorModel(a_config.name, index, a_config.kind, route, law, reference_length, parameter,
-                         control, bool(a_config.tension_only), xi_star, tca_type, fiber_given)
+                         control, bool(a_config.tension_only), xi_star, tca_type)
+
+
+def scenario_folder(scenario):
+    """The folder of the scenario's file (where a custom law's module may live), or None."""
+    return source_folder(scenario._sources)
+
+
+def source_folder(sources):
+    """The folder of the file a :class:`~tca_casadi.scenario.sources.SourceMap` maps, or None."""
+    name = getattr(sources, "origin", None) if sources is not None else None
+    if not name or name.startswith("<"):
+        return None
+    from pathlib import Path
+    return str(Path(name).resolve().parent)
 
 
 def _check_inside(scenario, index, config, a_index, route):

@@ -1,5 +1,5 @@
-"""3D drawing of a solved robot, as the paper draws it: centerline thick black, heated TCAs red,
-passive TCAs green, tendons orange, cross-sections blue; objects as grey boxes."""
+"""3D drawing of a solved robot, as the paper draws it: centerline thick black, heated TCAs (and
+active muscles) red, passive ones green, tendons orange, cross-sections blue; objects as grey boxes."""
 import numpy as np
 
 COLORS = {"heated": "#d62728", "passive": "#2ca02c", "tendon": "#ff7f0e",
@@ -45,9 +45,12 @@ def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_point
     everything = [points for group in everything for points in group]
     for key, actuator in solution.actuators.items():
         kind = "tendon" if actuator.kind == "tendon" else ("heated" if actuator.heated else "passive")
-        force = "slack" if actuator.slack else f"{actuator.tension * 1e3:.2f} mN"
+        force = "slack" if actuator.slack else (f"{actuator.tension:.3g} N" if abs(actuator.tension) >= 1
+                                                 else f"{actuator.tension * 1e3:.2f} mN")
+        word = {"heated": "pressurised" if actuator.pressure is not None else (
+            "active" if actuator.input is not None else "heated")}.get(kind, kind)
         ax.plot(*(_smooth(actuator.path) * 1e3), color=COLORS[kind], linewidth=1.6,
-                linestyle=":" if actuator.slack else "-", label=f"{key} ({kind}, {force})")
+                linestyle=":" if actuator.slack else "-", label=f"{key} ({word}, {force})")
     everything += _draw_loads(ax, solution.loads, np.hstack(everything))
     for pose in objects:
         corners = pose.corners() * 1e3

@@ -26,7 +26,7 @@ def line_style(k, points=None):
 
 def plot_sweep(result, path):
     """Two panels against the first parameter: tip displacement from the first point [mm] and
-    TCA/tendon tensions [mN]; dashed lines at events. Saves a PNG at ``path``."""
+    TCA/tendon tensions [mN] (N beyond 10 N); dashed lines at events. Saves a PNG at ``path``."""
     plt = _pyplot()
     parameter = result.parameters[0]
     x = result.values[:, 0]
@@ -36,10 +36,13 @@ def plot_sweep(result, path):
         top.plot(x, move[:, axis], label=f"tip {name}", **line_style(axis))
     top.plot(x, np.linalg.norm(move, axis=1), color="black", label="|tip displacement|", **line_style(3))
     top.set_ylabel("tip displacement [mm]")
-    for k, key in enumerate(result.points[0].solution.actuators):
-        bottom.plot(x, result.tensions(key) * 1e3, label=key, **line_style(k))
+    keys = list(result.points[0].solution.actuators)
+    largest = max([float(np.max(np.abs(result.tensions(key)))) for key in keys], default=0.0)
+    factor, unit = (1.0, "N") if largest >= 10.0 else (1e3, "mN")      # McKibben muscles pull newtons
+    for k, key in enumerate(keys):
+        bottom.plot(x, result.tensions(key) * factor, label=key, **line_style(k))
     bottom.axhline(0.0, color="grey", linewidth=0.8)
-    bottom.set_ylabel("tension [mN]")
+    bottom.set_ylabel(f"tension [{unit}]")
     bottom.set_xlabel(parameter.label + ("" if len(result.parameters) == 1 else " (and the others with it)"))
     bottom.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4))   # moduli in Pa: 1e5, not 100000
     for event in result.events:

@@ -25,6 +25,7 @@ def check_references(scenario, raw, sources):
     for index, name in enumerate(load_names):
         if name in module_names:
             fail(raw, sources, ("loads", index, "name"), f"load name {name!r} is also a module name")
+    _check_muscle_types(scenario, raw, sources)
     for index, module in enumerate(scenario.modules):
         _check_module(scenario, index, module, raw, sources)
     for index, load in enumerate(scenario.loads):
@@ -100,8 +101,43 @@ def _check_module(scenario, index, module, raw, sources):
             problem = temperature_problem(actuator.temperature, scenario.tca_types[actuator.type], actuator.type)
             if problem:
                 fail(raw, sources, a_path + ("temperature",), problem)
+        if actuator.kind not in ("tca", "tendon"):
+            _check_muscle(scenario, module, actuator, a_path, raw, sources)
         _check_span(route_span(actuator.route, module.length), module, a_path + ("route",), raw, sources)
     _check_coupling(module, path, raw, sources)
+
+
+def _check_muscle_types(scenario, raw, sources):
+    """A custom law's entry point imports and builds a scalar CasADi expression."""
+    from ..model.laws.custom import EntryPointError, residual_function
+    from ..model.robot import source_folder
+    for name, config in scenario.muscle_types.items():
+        if config.kind == "custom":
+            try:
+                residual_function(config.entry_point, tuple(config.parameters), source_folder(sources))
+            except EntryPointError as error:
+                fail(raw, sources, ("muscle_types", name, "entry_point"), str(error))
+
+
+def _check_muscle(scenario, module, actuator, path, raw, sources):
+    """A muscle's type exists and is of its kind; its input lies in the law's range."""
+    from ..model.laws import muscles
+    from ..model.laws.base import range_problem
+    types = scenario.muscle_types
+    if actuator.type not in types:
+        fail(raw, sources, path + ("type",),
+             f"unknown {actuator.kind} type {actuator.type!r}{closest(actuator.type, types)}")
+    config = types[actuator.type]
+    if config.kind != actuator.kind:
+        fail(raw, sources, path + ("type",), f"muscle_types.{actuator.type} is a {config.kind} type, "
+             f"not a {actuator.kind} one")
+    law = muscles()[actuator.kind]
+    values = {k: getattr(config, k) for k in law.RANGE_KEYS}
+    nominal = law(reference_length=1.0, **values)         # the range only
+    input_name = law.INPUT[0]
+    problem = range_problem(nominal, getattr(actuator, input_name), type_path=f"muscle_types.{actuator.type}")
+    if problem:
+        fail(raw, sources, path + (input_name,), problem)
 
 
 def _check_coupling(module, path, raw, sources):
@@ -109,12 +145,13 @@ def _check_coupling(module, path, raw, sources):
     coupling = module.thermal_coupling
     if coupling is None or coupling.between is None:
         return
-    tcas = [a.name for a in module.actuators if a.kind == "tca"]
+    from ..model.laws import thermal_kinds
+    tcas = [a.name for a in module.actuators if a.kind in thermal_kinds()]
     for k, pair in enumerate(coupling.between):
         for j, name in enumerate(pair):
             if name not in tcas:
                 fail(raw, sources, path + ("thermal_coupling", "between", k, j),
-                     f"not a TCA of module {module.name!r}: {name!r}{closest(name, tcas)}")
+                     f"not a TCA of module {module.name!r} (nor another heated muscle): {name!r}{closest(name, tcas)}")
         if pair[0] == pair[1]:
             fail(raw, sources, path + ("thermal_coupling", "between", k), "a TCA cannot be coupled to itself")
 

@@ -7,7 +7,7 @@ Cross-references (materials, TCA types, module names, routes inside the body) ar
 import math
 from typing import Annotated, Literal, Optional, Union
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, create_model, model_validator
 
 from ..units import to_si
 
@@ -316,7 +316,69 @@ class Tendon(Strict):
         return self
 
 
-Actuator = Annotated[Union[Tca, Tendon], Field(discriminator="kind")]
+# ----------------------------------------------------------------------------- other muscles
+def _law_field(kind_or_type, default, positive=False):
+    """A pydantic field from a law's declaration: a unit kind (quantity) or a type."""
+    from ..units import KINDS
+    if isinstance(kind_or_type, str) and kind_or_type in KINDS:
+        annotation = Annotated[float, _quantity(kind_or_type)]
+        if positive:
+            annotation = Annotated[float, _quantity(kind_or_type), Field(gt=0)]
+        if kind_or_type == "temperature":
+            annotation = Annotated[float, _quantity("temperature"), Field(ge=-273.15)]
+    else:
+        annotation = kind_or_type
+    if default is None:
+        return (Optional[annotation], None)
+    return (annotation, default)
+
+
+def _muscle_type_model(law):
+    """The ``muscle_types`` entry of one muscle kind, made from its law's declarations
+    (:mod:`tca_casadi.model.laws.base`)."""
+    fields = {"kind": (Literal[law.KIND], ...)}
+    for p in law.PARAMETERS:
+        fields[p.name] = _law_field(p.kind, p.default, p.positive)
+    for name, (kind_or_type, default) in law.OPTIONS.items():
+        fields[name] = _law_field(kind_or_type, default)
+    defaults = getattr(law, "THERMAL_DEFAULTS", None)
+    if defaults is not None:
+        thermal = create_model(f"{law.__name__}Thermal", __base__=TcaThermal,
+                               **{k: (TcaThermal.model_fields[k].rebuild_annotation(), v)
+                                  for k, v in defaults.items()})
+        fields["thermal"] = (thermal, Field(default_factory=thermal))
+
+    def check(self):
+        law.validate_type(self)
+        return self
+    return create_model(f"{law.__name__}Type", __base__=Strict, __doc__=law.__doc__,
+                        __validators__={"_law_checks": model_validator(mode="after")(check)}, **fields)
+
+
+def _muscle_actuator_model(law):
+    """An actuator of one muscle kind: ``name, kind, type, route, tension_only``, its input
+    (``temperature``, ``pressure``, ``input``... with its unit) and, when heated in ``simulate``,
+    a ``drive``."""
+    name, kind, default = law.INPUT
+    fields = {"name": (str, Field(min_length=1)), "kind": (Literal[law.KIND], ...), "type": (str, ...),
+              "route": (Route, ...), name: _law_field(kind, default), "tension_only": (bool, False)}
+    if law.THERMAL:
+        fields["drive"] = (Optional[TcaDrive], None)
+    return create_model(f"{law.__name__}Actuator", __base__=Strict,
+                        __doc__=f"A {law.KIND} actuator: tension unknown, fixed by its law at its {name}.",
+                        **fields)
+
+
+def _muscles():
+    from ..model.laws import muscles
+    return muscles()
+
+
+_MUSCLE_TYPES = [_muscle_type_model(law) for law in _muscles().values()]
+_MUSCLE_ACTUATORS = [_muscle_actuator_model(law) for law in _muscles().values()]
+MuscleType = Annotated[Union[tuple(_MUSCLE_TYPES)], Field(discriminator="kind")]
+
+Actuator = Annotated[Union[(Tca, Tendon, *_MUSCLE_ACTUATORS)], Field(discriminator="kind")]
 
 
 class Connector(Strict):
@@ -476,7 +538,9 @@ class InverseOptions(Strict):
     """Inverse statics (SPEC section 6): which temperatures vary, their bounds, the target."""
     target: Optional[InverseTarget] = None
     vary: Optional[list[str]] = None
-    bounds: Optional[Annotated[tuple[float, float], _vector("temperature", 2)]] = None
+    #: [low, high] of every varied input, in its unit (temperatures in degC, pressures in Pa;
+    #: strings with units allowed)
+    bounds: Optional[tuple[Union[float, str], Union[float, str]]] = None
     tolerance: Annotated[float, _quantity("length"), Field(gt=0)] = 1e-4
     regularisation: Annotated[float, Field(ge=0)] = 1e-3
     orientation_weight: Annotated[float, Field(ge=0)] = 1.0
@@ -540,6 +604,8 @@ class Scenario(Strict):
     base: Base = Field(default_factory=Base)
     materials: dict[str, Material]
     tca_types: dict[str, TcaType] = Field(default_factory=dict)
+    #: other muscles' types (SMA wires, McKibben muscles, user laws), each with its ``kind``
+    muscle_types: dict[str, MuscleType] = Field(default_factory=dict)
     modules: list[Module] = Field(min_length=1)
     loads: list[Load] = Field(default_factory=list)
     objects: list[GraspedObject] = Field(default_factory=list)

@@ -10,8 +10,6 @@ from ..model.compatibility import slack_length
 from ..model.rotations import rotations_of
 from ..solution import ActuatorResult, ModuleResult, Solution
 
-#: a TCA tension below this [N] counts as compression
-COMPRESSION_TOLERANCE = 1e-9
 #: a global balance residual above this (relative to the forces in play) is reported
 BALANCE_TOLERANCE = 1e-6
 
@@ -57,38 +55,33 @@ def actuator_result(actuator, module_res, tension, length, parameter):
     inside = (module_res.s >= s_a - tol) & (module_res.s <= s_b + tol)
     r = actuator.route.evaluate(np.clip(module_res.s[inside], s_a, s_b))[0]
     path = module_res.p[:, inside] + np.einsum("ijk,jk->ik", module_res.R[:, :, inside], r)
-    is_tca = actuator.kind == "tca"
-    law = actuator.law if is_tca else None
+    law = actuator.law if actuator.is_muscle else None
     stroke = float(length) - actuator.reference_length
+    free = law.free_stroke(parameter) if law is not None else None
+    own = {name: float(parameter) if actuator.control == name else None
+           for name in ("temperature", "displacement", "pressure", "input")}
     return ActuatorResult(
-        key=actuator.key, kind=actuator.kind,
-        temperature=float(parameter) if is_tca else None,
-        reference_temperature=law.reference_temperature if is_tca else None,
+        key=actuator.key, kind=actuator.kind, temperature=own["temperature"],
+        reference_temperature=getattr(law, "reference_temperature", None) if own["temperature"] is not None else None,
         tension=float(tension), length=float(length), reference_length=actuator.reference_length,
-        free_stroke=float(law.free_stroke(parameter)) if is_tca else None, path=path,
-        control=actuator.control, tension_only=actuator.tension_only,
-        displacement=float(parameter) if actuator.control == "displacement" else None,
-        slack_length=slack_length(actuator, stroke, float(tension), float(parameter)))
+        free_stroke=None if free is None else float(free), path=path,
+        control=actuator.control, tension_only=actuator.tension_only, displacement=own["displacement"],
+        slack_length=slack_length(actuator, stroke, float(tension), float(parameter)),
+        pressure=own["pressure"], input=own["input"], heated=bool(law is not None and law.heated(parameter)))
 
 
-def physics_warnings(robot, actuators):
-    """Warnings for TCAs in compression or beyond the fitted law's monotone range, and for
-    slack actuators."""
+def physics_warnings(robot, actuators, params):
+    """Warnings for slack actuators and what each muscle's law says of its state (a TCA in
+    compression or beyond its fit's monotone range, an SMA wire over its stress limit...)."""
     out = []
     for actuator in robot.unknowns:
         result = actuators[actuator.key]
         if result.slack_length:
             out.append(PhysicsWarning("slack", f"{actuator.key} is slack (F = 0; slack length {result.slack_length * 1e3:.4g} mm)"))
-        if actuator.kind != "tca":
-            continue
-        if result.tension < -COMPRESSION_TOLERANCE and not actuator.tension_only:
-            out.append(PhysicsWarning("compression", f"{actuator.key} is in compression (F = {result.tension * 1e3:.4g} mN): "
-                       "a real TCA would buckle or go slack; the law's extension G_t(0) "
-                       "exp(F G_t'(0)/G_t(0)) was used"))
-        limit = actuator.law.monotone_limit
-        if result.tension > limit:
-            out.append(PhysicsWarning("fit_range", f"{actuator.key} tension {result.tension * 1e3:.4g} mN "
-                                      f"is beyond the fit's monotone range ({limit * 1e3:.4g} mN)"))
+        if actuator.is_muscle:
+            value = float(params[robot.layout[actuator.parameter]][0])
+            out.extend(PhysicsWarning(kind, message) for kind, message in
+                       actuator.law.warnings(actuator.key, result.stroke, result.tension, value, actuator.tension_only))
     return out
 
 
@@ -106,7 +99,7 @@ def build_solution(robot, params, module_data, tensions, lengths, result, method
         parameter = params[robot.layout[actuator.parameter]][0]
         actuators[actuator.key] = actuator_result(actuator, modules[actuator.module], tensions[k],
                                                   lengths[k], parameter)
-    warnings = physics_warnings(robot, actuators)
+    warnings = physics_warnings(robot, actuators, params)
     balance = global_balance(robot, modules, params, tensions, extra_loads)
     if result.success and balance.relative > BALANCE_TOLERANCE:
         warnings.append(PhysicsWarning("global_balance", f"global balance off by {balance.relative:.1e} of the forces in play "

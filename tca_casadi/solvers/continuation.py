@@ -40,6 +40,14 @@ class StepFailure:
     crossed: bool = False     # det J_w changed sign: a fold or bifurcation, or another branch
 
 
+#: a change of the state below this fraction of its size is the solver's noise
+NOISE = 1e-9
+#: a tension_only actuator with less than this fraction of the largest tension is at its corner
+CORNER = 1e-6
+#: the trapezoid test's error is relative to at least this fraction of the state's size
+SMALL_STEP = 1e-5
+
+
 class BranchFollower:
     """Follow the branch of ``solver`` (a CollocationSolver) along ``P0 + lam delta``."""
 
@@ -83,13 +91,19 @@ class BranchFollower:
     def inconsistency(a, b):
         """How far the step from point ``a`` to ``b`` is from the trapezoidal rule on the
         branch's tangents, ``|w_b - w_a - (lam_b - lam_a)(w'_a + w'_b)/2| / |w_b - w_a|`` (max
-        norms). ``O(h^2)`` on one smooth branch; order one for a jump to another branch."""
+        norms). ``O(h^2)`` on one smooth branch; order one for a jump to another branch. A
+        change within :data:`NOISE` of ``|w|`` is the solver's noise, not a step (where the
+        state does not depend on the parameter, e.g. a fully transformed SMA wire), and the
+        error is measured against at least :data:`SMALL_STEP` of ``|w|`` (a jump to another
+        branch moves ``w`` by order one; at a law's C1 corner, e.g. where an SMA wire ends
+        its transformation, the trapezoid rule is out by order one of an ever smaller step)."""
         change = b.w - a.w
         size = float(np.max(np.abs(change)))
-        if size == 0.0:
+        scale = max(1.0, float(np.max(np.abs(a.w))))
+        if size <= NOISE * scale:
             return 0.0
         error = change - 0.5 * (b.lam - a.lam) * (a.w_rate + b.w_rate)
-        return float(np.max(np.abs(error))) / size
+        return float(np.max(np.abs(error))) / max(size, SMALL_STEP * scale)
 
     def advance(self, current, target, step, max_step, min_step):
         """Step from ``current`` to ``lam = target``, halving failed steps (growing good ones up
@@ -119,7 +133,13 @@ class BranchFollower:
 
 
 def _slack_pattern(solution):
-    return tuple(a.slack for a in solution.actuators.values() if a.tension_only)
+    """Per ``tension_only`` actuator: slack, at the corner (taut with no tension: an
+    unpressurised McKibben muscle, a tendon just taut) or taut. The branch has a corner where
+    this changes."""
+    tensions = [abs(a.tension) for a in solution.actuators.values()]
+    small = CORNER * max(tensions, default=0.0)
+    return tuple("slack" if a.slack else ("corner" if a.tension <= small else "taut")
+                 for a in solution.actuators.values() if a.tension_only)
 
 
 class ArclengthFollower:

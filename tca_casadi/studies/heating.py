@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model.rotations import matrix_to_quaternion
-from ..solvers.continuation import BranchFollower, _slack_pattern
+from ..solvers.continuation import NOISE, BranchFollower, _slack_pattern
 
 
 @dataclass
@@ -201,7 +201,9 @@ def _stretch_holds(checked, solution, params, linearisation, jump_tolerance=0.15
     except RuntimeError:                    # singular: a fold at an end
         return False
     size = float(np.max(np.abs(change)))
-    return size == 0.0 or float(np.max(np.abs(change - 0.5 * rates))) <= jump_tolerance * size
+    if size <= NOISE * max(1.0, float(np.max(np.abs(checked.solution.raw["w"])))):
+        return True
+    return float(np.max(np.abs(change - 0.5 * rates))) <= jump_tolerance * size
 
 
 def quick_step(solver, linearisation, solution, previous, params, jump_tolerance=0.15):

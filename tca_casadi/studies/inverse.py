@@ -60,13 +60,16 @@ class InverseStatics:
         self.method = method
         self.sim, self.robot = sim, sim.robot
         self.solver = sim.solver("collocation")
-        vary = list(vary) if vary else [a.parameter for a in self.robot.tcas]
+        vary = list(vary) if vary else [a.parameter for a in self.robot.muscles]
         if not vary:
-            raise ScenarioError("inverse statics needs TCAs to heat; the scenario has none")
+            raise ScenarioError("inverse statics needs TCAs (or other muscles) to drive; the scenario has none")
         self.parameters = resolve_parameters(self.robot, sim.params, vary)
+        inputs = {a.parameter: a for a in self.robot.muscles}
         for parameter in self.parameters:
-            if parameter.kind != "temperature":
-                raise ScenarioError(f"inverse statics varies TCA temperatures; {parameter.path} is not one")
+            if parameter.name not in inputs:
+                raise ScenarioError(f"inverse statics varies the muscles' inputs (TCA temperatures, "
+                                    f"pressures...); {parameter.path} is not one")
+        self._muscle = inputs
         self.bounds = self._bounds(bounds)
         self.tolerance, self.angle_tolerance = float(tolerance), float(angle_tolerance)
         self.regularisation, self.orientation_weight = float(regularisation), float(orientation_weight)
@@ -103,27 +106,25 @@ class InverseStatics:
         return Target.create(given.position, given.direction, given.orientation, point or given.point)
 
     # ------------------------------------------------------------------ bounds
-    def _type_range(self, parameter):
-        module_name, actuator_name = parameter.name.split(".")[:2]
-        module = next(m for m in self.sim.scenario.modules if m.name == module_name)
-        actuator = next(a for a in module.actuators if a.name == actuator_name)
-        kind = self.sim.scenario.tca_types[actuator.type]
-        return kind.reference_temperature, kind.max_temperature, actuator.type
-
     def _bounds(self, bounds):
         out = []
         for parameter in self.parameters:
-            low, high, type_name = self._type_range(parameter)
+            actuator = self._muscle[parameter.name]
+            low, high = actuator.law.inverse_range
+            if bounds is None and not (np.isfinite(low) and np.isfinite(high)):
+                raise ScenarioError(f"{parameter.path}: its law's range [{low:g}, {high:g}] is not finite; "
+                                    "give bounds (--bounds LOW HIGH)")
             if bounds is None:
                 out.append((low, high))
                 continue
             lo, hi = (parameter.to_si(b, "the bound") for b in bounds)
+            unit = parameter.unit
             if not lo < hi:
-                raise ScenarioError(f"bounds [{lo:g}, {hi:g}] degC are inverted or empty (need lower < upper)")
+                raise ScenarioError(f"bounds [{lo:g}, {hi:g}] {unit} are inverted or empty (need lower < upper)")
             if lo < low - 1e-9 or hi > high + 1e-9:
                 raise ScenarioError(
-                    f"bounds [{lo:g}, {hi:g}] degC leave {parameter.path}'s range [{low:g}, {high:g}] degC "
-                    f"(tca_types.{type_name}: reference_temperature to max_temperature)")
+                    f"bounds [{lo:g}, {hi:g}] {unit} leave {parameter.path}'s range [{low:g}, {high:g}] {unit} "
+                    f"({actuator.type_path}: {actuator.law.INVERSE_RANGE_TEXT})")
             out.append((lo, hi))
         return np.array(out, float)
 
@@ -335,7 +336,8 @@ class InverseStatics:
         return InverseResult(target, temperatures, best["position"], best["R"], best["position_error"],
                              best["angle_error"], reachable, status.success, best["objective"],
                              forward, difference, elapsed, iterations, tried, message,
-                             best["w"], best["tau"], self.method, status)
+                             best["w"], best["tau"], self.method, status,
+                             {p.path: p.unit for p in self.parameters})
 
     def residual_values(self, w, tau, vector):
         """The least-squares residuals ``r`` (m,), ``dr/dw`` (sparse) and ``dr/dtau`` (m, k) at

@@ -14,9 +14,10 @@ from .targets import Target
 
 @dataclass
 class InverseResult:
-    """The answer to one query (SI, temperatures degC)."""
+    """The answer to one query (SI, temperatures degC). ``temperatures`` holds every varied
+    input (TCA and SMA temperatures, McKibben pressures...), each in its ``units`` entry."""
     target: Target
-    temperatures: dict                 # {path: value}
+    temperatures: dict                 # {path: value}: the varied inputs
     position: np.ndarray               # achieved position of the target point [m]
     rotation: np.ndarray               # achieved frame (3, 3)
     position_error: float              # [m]
@@ -34,6 +35,7 @@ class InverseResult:
     tau: np.ndarray = field(repr=False, default=None)
     method: str = "reduced"            # 'reduced' (least squares) or 'ipopt' (full space)
     result: Optional[object] = None    # SolveStatus of the optimisation that gave the answer
+    units: dict = field(default_factory=dict)   # {path: unit} of the inputs (default degC)
 
     @property
     def verified(self):
@@ -84,7 +86,7 @@ class InverseResult:
                  f"  forward check: {self.verification_difference:.2e} m "
                  f"({'verified' if self.verified else 'NOT VERIFIED'})",
                  f"  {self.solve_time_s * 1e3:.0f} ms, {self.iterations} {ITERATIONS[self.method]}, {self.starts} start(s)"]
-        lines += [f"  {path:<28}{value:9.3f} degC" for path, value in self.temperatures.items()]
+        lines += [f"  {path:<28}{value:9.3f} {self.units.get(path, 'degC')}" for path, value in self.temperatures.items()]
         return "\n".join(lines)
 
 
@@ -93,7 +95,7 @@ def write_path_results(path, results):
     from ..output import write_csv
     temperature_names = list(results[0].temperatures)
     header = (["row", "target_x [m]", "target_y [m]", "target_z [m]"]
-              + [f"{name} [degC]" for name in temperature_names]
+              + [f"{name} [{results[0].units.get(name, 'degC')}]" for name in temperature_names]
               + ["x [m]", "y [m]", "z [m]", "position_error [m]", "angle_error [deg]",
                  "reachable", "verified", "solve_time [s]", "iterations"])
     rows = []

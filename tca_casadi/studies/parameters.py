@@ -128,11 +128,11 @@ def resolve_parameters(robot, params, paths):
 
 def check_range(robot, parameter, *values, params=None):
     """A value that a sweep or inverse statics would reach and a scenario could not hold is an
-    error: a TCA temperature outside its type's validated range (the scenario's
-    ``min_temperature`` / ``max_temperature``) or, at ``params`` otherwise, anything
+    error: a muscle's input outside its law's range (a TCA's ``min_temperature`` /
+    ``max_temperature``, a McKibben muscle's ``max_pressure``...) or, at ``params`` otherwise, anything
     :meth:`Robot.problems` finds (a modulus not positive, a route outside the body...)."""
     actuator = next((a for a in robot.actuators if a.parameter == parameter.name), None)
-    if actuator is None or actuator.kind != "tca":
+    if actuator is None or not actuator.is_muscle:
         if params is None or parameter.kind in ("force", "moment", "mass", "acceleration"):
             return
         for value in np.ravel(values):
@@ -140,9 +140,7 @@ def check_range(robot, parameter, *values, params=None):
             if problems:
                 raise ScenarioError(f"{parameter.path} = {value:g} {parameter.unit}: " + "; ".join(problems))
         return
-    law = actuator.law
     for value in np.ravel(values):
-        if not law.min_temperature <= value <= law.max_temperature:
-            raise ScenarioError(f"{parameter.path}: {value:g} degC is outside the TCA type's validated "
-                                f"range [{law.min_temperature:g}, {law.max_temperature:g}] degC "
-                                "(min_temperature, max_temperature of its tca_types entry)")
+        problem = actuator.law.input_problem(parameter.path, value, actuator.type_path)
+        if problem:
+            raise ScenarioError(problem)

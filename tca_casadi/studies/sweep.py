@@ -149,7 +149,8 @@ class Sweep:
         where = _describe(self.parameters, last.values)
         text = (f"stopped at {where}: no converged step down to a step of {self.min_step:g} "
                 f"of the range")
-        rate = np.max(np.abs(last.w_rate)) / max(np.max(np.abs(first.w_rate)), 1e-300)
+        start_rate = np.max(np.abs(first.w_rate))
+        rate = np.max(np.abs(last.w_rate)) / start_rate if start_rate > 0 else 1.0
         sigma = last.sigma_min / max(first.sigma_min, 1e-300)
         if failure.crossed or sigma < 0.1 or rate > 10:
             return (f"{text}. The Jacobian is (nearly) singular there (smallest singular value "

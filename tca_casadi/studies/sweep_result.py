@@ -147,7 +147,7 @@ def find_events(robot, points, parameters):
                 event("slack" if rb.slack else "taut", between(0.5),
                       f"{actuator.key} {'goes slack' if rb.slack else 'becomes taut'}")
             fa, fb = ra.tension, rb.tension
-            if actuator.kind != "tca":
+            if not actuator.is_muscle:
                 continue
             if not actuator.tension_only and (fa * fb < 0 or (fa != 0 and fb == 0)):
                 event("tension_sign", between(fa / (fa - fb)),

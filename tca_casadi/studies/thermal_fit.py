@@ -70,7 +70,7 @@ def read_heating_curve(path, robot, sigma=None):
     header, records = rows[0], rows[1:]
     if not records:
         raise ScenarioError(f"fit --data: {path} has a header but no rows")
-    keys = [a.key for a in robot.tcas]
+    keys = [a.key for a in robot.thermal_actuators]
     time_column, measured, sigmas = None, [], {}
     for column, text in enumerate(header):
         name, unit = _split(text)
@@ -114,10 +114,16 @@ def _value(cell, unit, target, column, row, difference=False):
 
 @dataclass
 class ThermalParameter:
-    """A fitted thermal constant: ``tca_types.TYPE.thermal.KEY``."""
+    """A fitted thermal constant: ``tca_types.TYPE.thermal.KEY`` (or an SMA wire's,
+    ``muscle_types.TYPE.thermal.KEY``)."""
     path: str
     tca_type: str
     key: str
+
+    @property
+    def type_path(self):
+        """``tca_types.TYPE`` or ``muscle_types.TYPE``."""
+        return self.path.rsplit(".", 2)[0]
 
     @property
     def unit(self):
@@ -141,12 +147,15 @@ class ThermalParameter:
 
 def thermal_parameter(scenario, path):
     """The :class:`ThermalParameter` of ``path``; ScenarioError naming what a time-series fit takes."""
+    from ..model.laws import thermal_kinds
+    heated = {f"tca_types.{t}" for t in scenario.tca_types} | {
+        f"muscle_types.{t}" for t, config in scenario.muscle_types.items() if config.kind in thermal_kinds()}
     parts = path.split(".")
-    if len(parts) == 4 and parts[0] == "tca_types" and parts[2] == "thermal" and parts[3] in THERMAL_KEYS \
-            and parts[1] in scenario.tca_types:
+    if len(parts) == 4 and f"{parts[0]}.{parts[1]}" in heated and parts[2] == "thermal" and parts[3] in THERMAL_KEYS:
         return ThermalParameter(path, parts[1], parts[3])
-    types = ", ".join(f"tca_types.{t}.thermal.{k}" for t in scenario.tca_types for k in THERMAL_KEYS)
-    raise ScenarioError(f"fit --param {path}: a time-series fit takes a TCA type's thermal constants ({types})")
+    types = ", ".join(f"{t}.thermal.{k}" for t in sorted(heated) for k in THERMAL_KEYS)
+    raise ScenarioError(f"fit --param {path}: a time-series fit takes a TCA type's (or an SMA type's) "
+                        f"thermal constants ({types})")
 
 
 class ThermalFitModel:
@@ -169,7 +178,7 @@ class ThermalFitModel:
 
     def _nominal(self, parameter):
         """The constant's value in the scenario: that of the first heated TCA of its type."""
-        index = next((k for k, a in enumerate(self.timed.heated) if a.tca_type == parameter.tca_type), None)
+        index = next((k for k, a in enumerate(self.timed.heated) if a.type_path == parameter.type_path), None)
         if index is None:
             raise ScenarioError(f"fit --param {parameter.path}: no heated TCA (with a power, voltage, current or "
                                 f"setpoint drive) is of type {parameter.tca_type}")
@@ -180,7 +189,7 @@ class ThermalFitModel:
         from dataclasses import replace
         laws = list(self.timed.laws)
         for parameter, value in zip(self.parameters, theta):
-            laws = [replace(law, **{parameter.key: float(value)}) if actuator.tca_type == parameter.tca_type else law
+            laws = [replace(law, **{parameter.key: float(value)}) if actuator.type_path == parameter.type_path else law
                     for actuator, law in zip(self.timed.heated, laws)]
         return laws
 

@@ -13,7 +13,7 @@ import copy
 import numpy as np
 
 from ..errors import ScenarioError
-from ..model.thermal import thermal_law
+from ..model.laws import thermal_kinds
 from ..scenario.loader import validate
 from ..scenario.overrides import apply_overrides
 from ..solvers.thermal import Drive, Schedule, integrate, steady_state
@@ -93,18 +93,18 @@ class TimeSimulation:
             check_dynamics(sim, self.dt)
         self._parameter_schedule = None
         self.states = self._states_after_events()
-        self.heated = [a for a in sim.robot.tcas if self._drive(scenario, a).kind in HEATED]
-        self.laws = [thermal_law(scenario.tca_types[a.tca_type], a.law.fiber_length) for a in self.heated]
+        self.heated = [a for a in sim.robot.thermal_actuators if self._drive(scenario, a).kind in HEATED]
+        self.laws = [a.thermal_law(scenario) for a in self.heated]
         for actuator, law in zip(self.heated, self.laws):
             kind = self._drive(scenario, actuator).kind
             if kind in ("voltage", "current") and not law.resistance > 0:
-                raise ScenarioError(f"{actuator.key}: a {kind} drive needs tca_types.{actuator.tca_type}.resistance")
+                raise ScenarioError(f"{actuator.key}: a {kind} drive needs {actuator.type_path}.resistance")
             if kind == "setpoint":
                 highest = max(self._drive(state, actuator).value for state, _ in self.states)
                 limit = actuator.law.max_temperature
                 if highest > limit:
-                    raise ScenarioError(f"{actuator.key}: setpoint {highest:g} degC is above tca_types."
-                                        f"{actuator.tca_type}.max_temperature ({limit:g} degC)")
+                    raise ScenarioError(f"{actuator.key}: setpoint {highest:g} degC is above "
+                                        f"{actuator.type_path}.max_temperature ({limit:g} degC)")
         self.coupling = self._coupling()
 
     def _coupling(self):
@@ -117,7 +117,7 @@ class TimeSimulation:
             coupling = module.thermal_coupling
             if coupling is None:
                 continue
-            names = [a.name for a in module.actuators if a.kind == "tca"]
+            names = [a.name for a in module.actuators if a.kind in thermal_kinds()]
             pairs = coupling.between or [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]
             for pair in pairs:
                 for name in pair:
@@ -159,7 +159,7 @@ class TimeSimulation:
     def _with_set_temperatures(self, scenario, params):
         """``params`` with each ``kind: temperature`` drive's value as its TCA's temperature."""
         params = params.copy()
-        for actuator in self.sim.robot.tcas:
+        for actuator in self.sim.robot.thermal_actuators:
             config = next(a for a in scenario.modules[actuator.module].actuators if a.name == actuator.name)
             if config.drive is not None and config.drive.kind == "temperature":
                 params[self.sim.robot.layout[actuator.parameter]] = config.drive.value
@@ -212,7 +212,7 @@ class TimeSimulation:
         if self.heated:
             initial = steady_state(self.laws, drives, ambient, self.coupling)      # before any event
             history = integrate(self.laws, drives, ambient, initial, times, self.coupling)
-        layout, tcas = self.sim.robot.layout, self.sim.robot.tcas
+        layout, tcas = self.sim.robot.layout, self.sim.robot.thermal_actuators
         powers = np.full((times.size, len(tcas)), np.nan)
         path = []
         for k, t in enumerate(times):
@@ -277,7 +277,7 @@ class TimeSimulation:
         history = getattr(series, "history", None)
         reached = max(len(series.solutions), 1)
         tcas = {}
-        for j, actuator in enumerate(self.sim.robot.tcas):
+        for j, actuator in enumerate(self.sim.robot.thermal_actuators):
             entry = {"drive": self._drive(self.sim.scenario, actuator).kind,
                      "peak_temperature": float(np.max(series.temperatures[:reached, j]))}
             if actuator in self.heated:

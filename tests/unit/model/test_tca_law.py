@@ -5,7 +5,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from tca_casadi.model.tca_law import TcaLaw
+from tca_casadi.model.laws.tca import TcaLaw
 LAW = TcaLaw(coil_radius=0.6e-3, fiber_radius=0.5e-3, pitch_angle=math.radians(30), fiber_length=0.09,
              reference_length=0.045, reference_temperature=25.0,
              untwist_coefficients=(-0.0161, 0.3338, -7.7311), shear_coefficients=(37.58e6, 111.33e6, 0.85e6))

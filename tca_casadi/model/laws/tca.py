@@ -11,12 +11,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arith import cos, is_casadi, sin
+from ..arith import cos, is_casadi, sin
+from .base import HeatedLaw, compression_warnings
 
 
 @dataclass(frozen=True)
-class TcaLaw:
-    """Constants of one TCA. Units: m, N, Pa, degC, rad/m."""
+class TcaLaw(HeatedLaw):
+    """Constants of one TCA. Units: m, N, Pa, degC, rad/m. Its type lives in ``tca_types``
+    (its parameters: :data:`tca_casadi.model.parameters.TCA_KEYS`)."""
     coil_radius: float
     fiber_radius: float
     pitch_angle: float
@@ -27,9 +29,12 @@ class TcaLaw:
     shear_coefficients: tuple    # (a2, a1, a0), Pa
     min_temperature: float = -273.15   # degC: the range the law is validated for
     max_temperature: float = float("inf")
+    fiber_length_given: bool = False   # the type gives fiber_length (else l* / sin(alpha))
+
+    KIND = "tca"
 
     @classmethod
-    def from_type(cls, tca_type, reference_length):
+    def from_type(cls, tca_type, reference_length, **context):
         """Law of a TCA of ``tca_type`` whose path has reference length ``l*`` [m]."""
         alpha = tca_type.pitch_angle
         fiber = tca_type.fiber_length or reference_length / math.sin(alpha)
@@ -37,7 +42,10 @@ class TcaLaw:
                    tca_type.reference_temperature,
                    (tca_type.untwist.c2, tca_type.untwist.c1, tca_type.untwist.c0),
                    (tca_type.shear_modulus.a2, tca_type.shear_modulus.a1, tca_type.shear_modulus.a0),
-                   tca_type.min_temperature, tca_type.max_temperature)
+                   tca_type.min_temperature, tca_type.max_temperature, tca_type.fiber_length is not None)
+
+    def with_parameters(self, param, prefix, reference_length):
+        return TcaLaw.from_parameters(self, param, prefix, reference_length, self.fiber_length_given)
 
     @classmethod
     def from_parameters(cls, nominal, param, prefix, reference_length, fiber_length_given):
@@ -52,7 +60,7 @@ class TcaLaw:
                    value("reference_temperature"),
                    tuple(value(f"untwist.{c}") for c in ("c2", "c1", "c0")),
                    tuple(value(f"shear_modulus.{a}") for a in ("a2", "a1", "a0")),
-                   nominal.min_temperature, nominal.max_temperature)
+                   nominal.min_temperature, nominal.max_temperature, fiber_length_given)
 
     @property
     def stroke_coefficient(self):
@@ -105,3 +113,34 @@ class TcaLaw:
     def residual_scale(self):
         """A natural size of :meth:`residual` [Pa m], to scale it to order one."""
         return self.shear_coefficients[2] * self.reference_length
+
+    # ------------------------------------------------------------------ the interface's rest
+    def input_problem(self, key, value, type_path=None):
+        low, high = self.input_range
+        if low <= value <= high:
+            return None
+        return (f"{key}: {value:g} degC is outside the TCA type's validated range [{low:g}, {high:g}] degC "
+                "(min_temperature, max_temperature of its tca_types entry)")
+
+    def gap(self, stroke, force, value):
+        """Slack length [m]: ``free_stroke(T) - delta`` at F = 0 (the residual over ``G_t``)."""
+        return float(-self.residual(stroke, force, value) / self.shear_modulus(max(force, 0.0)))
+
+    def warnings(self, key, stroke, force, value, tension_only):
+        out = compression_warnings(key, force, tension_only, "a real TCA would buckle or go slack; the "
+                                   "law's extension G_t(0) exp(F G_t'(0)/G_t(0)) was used")
+        if force > self.monotone_limit:
+            out.append(("fit_range", f"{key} tension {force * 1e3:.4g} mN "
+                        f"is beyond the fit's monotone range ({self.monotone_limit * 1e3:.4g} mN)"))
+        return out
+
+    def structural_problems(self, key):
+        out = []
+        if not 0 < self.fiber_radius < self.coil_radius:
+            out.append(f"{key}: need 0 < fiber_radius < coil_radius "
+                       f"(got {self.fiber_radius:g} m and {self.coil_radius:g} m)")
+        if not 0 < self.pitch_angle < np.pi / 2:
+            out.append(f"{key}: pitch_angle {self.pitch_angle:g} rad is outside (0, pi/2)")
+        if not self.shear_coefficients[2] > 0:
+            out.append(f"{key}: shear_modulus.a0 must be positive")
+        return out
