@@ -99,3 +99,24 @@ def _loads(rng, module, k):
                         "moment": (rng.normal(size=3) * 0.05 * force).tolist(),
                         "frame": str(rng.choice(["global", "body"]))})
     return out
+
+
+def random_muscle_robot(seed):
+    """:func:`random_robot` with every TCA replaced by another muscle, sized to its module: a
+    thin (25 micrometre) SMA wire at 25-72 degC or a small McKibben muscle at 0-20 kPa (some
+    ``tension_only``)."""
+    rng = np.random.default_rng(seed + 10_000)
+    scenario = random_robot(seed)
+    scenario["muscle_types"] = {"wire": {"kind": "sma", "wire_diameter": "25 um"},
+                                "pam": {"kind": "mckibben", "radius": "0.3 mm", "braid_angle": "22 deg",
+                                        "correction": float(rng.uniform(1.0, 1.3)), "max_pressure": "30 kPa"}}
+    for module in scenario["modules"]:
+        for k, actuator in enumerate(module["actuators"]):
+            if actuator["kind"] != "tca":
+                continue
+            common = {"name": actuator["name"], "route": actuator["route"], "tension_only": bool(rng.random() < 0.3)}
+            if rng.random() < 0.5:
+                module["actuators"][k] = dict(common, kind="sma", type="wire", temperature=float(rng.uniform(25, 72)))
+            else:
+                module["actuators"][k] = dict(common, kind="mckibben", type="pam", pressure=float(rng.uniform(0, 20e3)))
+    return scenario

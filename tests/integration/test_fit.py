@@ -256,7 +256,7 @@ def test_cli_fits_the_shipped_heating_curve(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--param", "materials.ecoflex30.youngs_modulus"], "a time-series fit takes a TCA type's thermal constants"),
+    (["--param", "materials.ecoflex30.youngs_modulus"], "a time-series fit takes a TCA type's (or an SMA type's) thermal constants"),
     (["--param", C, "--sigma", "temperature=-1"], "positive"),
 ])
 def test_heating_bad_input(tmp_path, capsys, args, message):

@@ -308,3 +308,35 @@ def test_an_entry_point_that_builds_no_scalar_expression_is_refused(tmp_path, ca
     err = capsys.readouterr().err
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_random_robots_with_muscles_balance_and_both_solvers_agree(seed):
+    """Random chains and trees with SMA wires and McKibben muscles on straight, helical and spline
+    routes: the global force and moment balance holds and shooting agrees with collocation."""
+    import sys
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from random_robots import random_muscle_robot
+    scenario = random_muscle_robot(seed)
+    scenario["solver"] = {"intervals": 32, "refine": "off"}      # the balance, not the refinement
+    sim = tc.Simulation(tc.load_scenario(scenario))
+    report, collocation, shooting = check(sim)
+    assert collocation.converged and shooting.converged, (collocation.message, shooting.message)
+    assert collocation.balance.relative < 1e-8
+    assert_allclose(collocation.tip_position, shooting.tip_position, rtol=0, atol=1e-6)
+    for key, a in collocation.actuators.items():
+        assert abs(a.tension - shooting.actuators[key].tension) <= 1e-5 * max(1e-3, abs(a.tension)), key
+
+
+def test_a_mckibben_muscle_s_geometry_fits_from_tip_measurements():
+    """Calibration reaches a muscle's constants as NLP parameters: noiseless tip positions of the
+    McKibben segment at six pressures, made at r0 = 2.2 mm and alpha0 = 22 deg, give them back."""
+    from tca_casadi.studies.fit import synthetic_measurements
+    sim = tc.Simulation.from_file("scenarios/bending_module_mckibben.yaml")
+    truth = {"muscle_types.thin.radius": 2.2e-3, "muscle_types.thin.braid_angle": math.radians(22)}
+    inputs = {"segment.pam1.pressure": np.linspace(50e3, 300e3, 6)}
+    data = synthetic_measurements(sim, truth, inputs, ["tip_x", "tip_z"], {"length": 1e-12})
+    result = tc.Fit(sim, data, list(truth)).run()
+    assert result.converged, result.message
+    for q, value in zip(result.parameters, truth.values()):
+        assert_allclose(q.value, value, rtol=1e-6)

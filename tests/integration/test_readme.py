@@ -101,8 +101,9 @@ def test_shell_block(workdir, block):
     for command in [c for c in block.strip().splitlines() if c and not c.startswith("#")]:
         if _skipped(command):
             continue
-        result = subprocess.run(command.replace("tca-casadi ", f"{sys.executable} -m tca_casadi.cli ")
-                                .replace("python ", f"{sys.executable} ", 1),
+        if command.startswith("python "):
+            command = sys.executable + command[len("python"):]
+        result = subprocess.run(command.replace("tca-casadi ", f"{sys.executable} -m tca_casadi.cli "),
                                 shell=True, cwd=workdir, capture_output=True, text=True, timeout=900)
         assert result.returncode == 0, f"{command}\n{result.stdout[-2000:]}\n{result.stderr[-2000:]}"
 

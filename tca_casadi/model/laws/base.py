@@ -22,7 +22,7 @@ A muscle is one file in this package defining ``MUSCLE = TheLawClass``: the scen
 (``muscle_types:`` entries and the actuators of that kind), the parameter vector and the checks
 are made from its declarations (:mod:`tca_casadi.model.laws`).
 """
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 import math
 from typing import ClassVar, Optional
 
@@ -30,14 +30,13 @@ from typing import ClassVar, Optional
 @dataclass(frozen=True)
 class LawParameter:
     """One numeric constant of a law: its key (in ``muscle_types.TYPE`` and in the parameter
-    vector), unit kind (:data:`tca_casadi.units.KINDS`), default (None: required), whether it
-    must be positive, and what it is. ``optional``: may be left out (then None)."""
+    vector), unit kind (:data:`tca_casadi.units.KINDS`), default (None: may be left out, and is
+    then no parameter), whether it must be positive, and what it is."""
     name: str
     kind: str
     default: Optional[float]
     doc: str
     positive: bool = True
-    optional: bool = False
 
 
 class ActuatorLaw:
@@ -135,10 +134,6 @@ class ActuatorLaw:
             if p.positive and value is not None and not float(value) > 0:
                 out.append(f"{key}: {p.name} = {float(value):g} must be positive")
         return out
-
-    @classmethod
-    def field_names(cls):
-        return [f.name for f in fields(cls)]
 
 
 class HeatedLaw(ActuatorLaw):

@@ -24,6 +24,9 @@ import math
 from ..arith import cos, sin, sqrt
 from .base import ActuatorLaw, LawParameter
 
+#: the braid angle where the muscle stops pulling, ``atan(sqrt 2)`` = 54.7 deg
+NEUTRAL_ANGLE = math.atan(math.sqrt(2.0))
+
 
 @dataclass(frozen=True)
 class McKibbenLaw(ActuatorLaw):
@@ -41,18 +44,25 @@ class McKibbenLaw(ActuatorLaw):
         LawParameter("radius", "length", 2e-3, "initial radius of the braided sleeve r0 [m]"),
         LawParameter("braid_angle", "angle", math.radians(20.0), "initial braid angle alpha0 [rad]"),
         LawParameter("correction", "dimensionless", 1.0, "Tondu and Lopez's k (1: Chou and Hannaford)"),
-        LawParameter("rest_length", "length", None, "rest length l0 [m] (default: the path's l*)",
-                     optional=True),
+        LawParameter("rest_length", "length", None, "rest length l0 [m] (default: the path's l*)"),
     )
     OPTIONS = {"max_pressure": ("pressure", 600e3)}
 
     @classmethod
     def validate_type(cls, config):
-        if not config.braid_angle < math.atan(math.sqrt(2.0)):
+        if not config.braid_angle < NEUTRAL_ANGLE:
             raise ValueError(f"braid_angle {math.degrees(config.braid_angle):.4g} deg must be below "
                              "54.7 deg (the neutral angle, where the muscle stops pulling)")
         if not config.correction >= 1.0:
             raise ValueError(f"correction (Tondu-Lopez k) {config.correction:g} must be at least 1")
+
+    def structural_problems(self, key):
+        out = super().structural_problems(key)
+        if not float(self.braid_angle) < NEUTRAL_ANGLE:
+            out.append(f"{key}: braid_angle {math.degrees(float(self.braid_angle)):.4g} deg must be below 54.7 deg")
+        if not float(self.correction) >= 1.0:
+            out.append(f"{key}: correction {float(self.correction):g} must be at least 1")
+        return out
 
     # ------------------------------------------------------------------ the law
     @property
