@@ -262,6 +262,36 @@ def study_rates(per_axis, design_per_length):
     return out
 
 
+MUSCLES = {"sma": ("bending_module_sma", "bending.sma1.temperature", 25.0, 110.0),
+           "mckibben": ("bending_module_mckibben", "segment.pam1.pressure", 0.0, 400e3),
+           "custom": ("bending_module_custom", "bending.m1.input", 0.0, 2.0)}
+
+
+def muscle_rates(repeats, steps):
+    """The other muscles' example robots: build, cold solve, a warm Newton solve after a 1 %
+    change of the input, a natural-continuation sweep of the input over its range, and the
+    collocation/shooting check."""
+    from tca_casadi.solvers.collocation import clear_built_solvers
+    out = {}
+    for kind, (name, path, start, stop) in MUSCLES.items():
+        source = SCENARIOS / f"{name}.yaml"
+        row = {}
+        row["build_s"], row["cold_s"], sim, cold = first_solves(source, repeats)
+        solver = sim.solver()
+        slot = sim.robot.layout[path]
+        nudged = sim.params.copy()
+        nudged[slot] = nudged[slot] * 1.01 + 0.01 * (stop - start) * (nudged[slot] == 0)
+        row["warm_newton_s"], warm = median_time(lambda: solver.solve_newton(nudged, cold.raw["w"]), max(repeats, 5))
+        row["warm_converged"] = bool(warm.converged)
+        row["sweep_steps"] = steps
+        row["sweep_s"], sweep = median_time(lambda: Sweep(sim, [path], start, stop, steps=steps).run(), repeats)
+        row["sweep_completed"] = bool(sweep.completed)
+        row.update(check_times([name])[name])
+        out[kind] = row
+        clear_built_solvers()
+    return out
+
+
 def check_times(names):
     """``tca-casadi check`` on shipped scenarios: collocation and shooting seconds, agreement."""
     from tca_casadi.studies import check
@@ -322,7 +352,10 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="smoke run: 1 repeat, the bending module only")
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("-o", "--output", type=Path, default=ROOT / "results" / "bench.json")
+    parser.add_argument("--muscles", action="store_true", help="only the other muscles' rows (results/bench_muscles.json)")
     args = parser.parse_args(argv)
+    if args.muscles:
+        return _muscles_only(args)
     if args.quick:
         plan = {"bending_module": (1, 11, 1, 2)}
     else:
@@ -342,6 +375,7 @@ def main(argv=None):
     motion = {name: [dynamics_rate(name, dt, 5 if args.quick else 50, jit) for jit in ((False,) if args.quick else (False, True))
                      for dt in (0.002, 0.01)] for name in (["bending module"] if args.quick else list(DYNAMIC_PROBLEMS))}
     studies = study_rates(4, 4) if args.quick else study_rates(22, 20)
+    muscles = muscle_rates(1, 11) if args.quick else muscle_rates(args.repeats, 35)
     checks = check_times(["bending_module"] if args.quick else
                          ["bending_module", "twisting_module", "tendon_robot", "tendon_robot_two_segments",
                           "arm", "arm_pick_and_place", "analytic/pure_moment", "analytic/tip_load",
@@ -365,13 +399,36 @@ def main(argv=None):
           f"{studies['serial_samples_per_s']:.0f} samples/s, 2 processes {studies['processes_2_samples_per_s']:.0f} "
           f"samples/s (parallel efficiency {studies['parallel_efficiency']:.0%}); design study with rebuilt geometry "
           f"({studies['design_samples']} samples, 5 structures) {studies['design_samples_per_s']:.1f} samples/s")
+    print_muscles(muscles)
     print(f"measured {machine['date']} on {machine['cpus']} CPUs, Python {machine['python']}")
     args.output.parent.mkdir(parents=True, exist_ok=True)
     args.output.write_text(json.dumps({"quick": args.quick, "machine": machine, "startup": started, "simulate": cycle,
-                                       "dynamics": motion, "study": studies,
+                                       "dynamics": motion, "study": studies, "muscles": muscles,
                                        "check": checks, "rows": rows}, indent=2))
     print(f"wrote {args.output}")
     return rows
+
+
+def print_muscles(muscles):
+    for kind, r in muscles.items():
+        print(f"muscles ({kind}): build {r['build_s']:.3f} s, cold {r['cold_s'] * 1e3:.1f} ms, warm Newton "
+              f"{r['warm_newton_s'] * 1e3:.2f} ms, sweep of {r['sweep_steps']} steps {r['sweep_s']:.2f} s"
+              f"{'' if r['sweep_completed'] else ' (STOPPED)'}, check: collocation {r['collocation_s'] * 1e3:.1f} ms, "
+              f"shooting {r['shooting_s'] * 1e3:.0f} ms, {'agree' if r['agree'] else 'DISAGREE'} "
+              f"(tip {r['tip_difference_m']:.1e} m)")
+
+
+def _muscles_only(args):
+    muscles = muscle_rates(args.repeats, 35)
+    print_muscles(muscles)
+    machine = {"date": date.today().isoformat(), "cpus": _cpus(), "python": platform.python_version(),
+               "platform": platform.platform()}
+    print(f"measured {machine['date']} on {machine['cpus']} CPUs, Python {machine['python']}")
+    output = args.output.with_name("bench_muscles.json")
+    output.parent.mkdir(parents=True, exist_ok=True)
+    output.write_text(json.dumps({"machine": machine, "muscles": muscles}, indent=2))
+    print(f"wrote {output}")
+    return muscles
 
 
 def _cpus():
