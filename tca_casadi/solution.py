@@ -60,6 +60,7 @@ class ActuatorResult:
     pressure: Optional[float] = None      # [Pa] McKibben muscles
     input: Optional[float] = None         # a custom law's input (SI)
     heated: bool = False                  # its law calls the input active (heated, pressurised)
+    at_corner: bool = False               # tension_only, taut with no tension (see assemble.CORNER)
 
     @property
     def stroke(self):

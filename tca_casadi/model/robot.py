@@ -417,8 +417,7 @@ def _actuator(scenario, index, config, a_index, a_config):
         law = TcaLaw.from_type(scenario.tca_types[a_config.type], reference_length)
     elif a_config.kind in muscles():
         tca_type = a_config.type
-        law = muscles()[a_config.kind].from_type(scenario.muscle_types[a_config.type], reference_length,
-                                                 folder=scenario_folder(scenario))
+        law = muscles()[a_config.kind].from_type(scenario.muscle_types[a_config.type], reference_length)
         control = law.INPUT[0]
     else:
         control = a_config.control
@@ -431,18 +430,7 @@ def _actuator(scenario, index, config, a_index, a_config):
                          control, bool(a_config.tension_only), xi_star, tca_type)
 
 
-def scenario_folder(scenario):
-    """The folder of the scenario's file (where a custom law's module may live), or None."""
-    return source_folder(scenario._sources)
 
-
-def source_folder(sources):
-    """The folder of the file a :class:`~tca_casadi.scenario.sources.SourceMap` maps, or None."""
-    name = getattr(sources, "origin", None) if sources is not None else None
-    if not name or name.startswith("<"):
-        return None
-    from pathlib import Path
-    return str(Path(name).resolve().parent)
 
 
 def _check_inside(scenario, index, config, a_index, route):

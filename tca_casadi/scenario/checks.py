@@ -110,11 +110,10 @@ def _check_module(scenario, index, module, raw, sources):
 def _check_muscle_types(scenario, raw, sources):
     """A custom law's entry point imports and builds a scalar CasADi expression."""
     from ..model.laws.custom import EntryPointError, residual_function
-    from ..model.robot import source_folder
     for name, config in scenario.muscle_types.items():
         if config.kind == "custom":
             try:
-                residual_function(config.entry_point, tuple(config.parameters), source_folder(sources))
+                residual_function(config.entry_point, tuple(config.parameters), config.folder)
             except EntryPointError as error:
                 fail(raw, sources, ("muscle_types", name, "entry_point"), str(error))
 

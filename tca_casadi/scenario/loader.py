@@ -22,8 +22,24 @@ def load_scenario(source, overrides=()):
     """
     raw, sources = read_raw(source)
     raw = apply_overrides(raw, overrides, sources)
+    _anchor_law_folders(raw, sources)
     scenario = validate(raw, sources)
     return scenario
+
+
+def _anchor_law_folders(raw, sources):
+    """A custom law's ``folder`` (where its entry point's module is looked for after the Python
+    path) made absolute, relative to the scenario file's folder, which is also its default; so
+    the scenario keeps finding its law when it travels as a mapping (study workers, timelines)."""
+    types = raw.get("muscle_types")
+    if not isinstance(types, dict) or sources.origin.startswith("<"):
+        return
+    here = Path(sources.origin).resolve().parent
+    for config in types.values():
+        if isinstance(config, dict) and config.get("kind") == "custom":
+            folder = config.get("folder")
+            if folder is None or isinstance(folder, str):
+                config["folder"] = str(here / folder) if folder else str(here)
 
 
 def read_raw(source):

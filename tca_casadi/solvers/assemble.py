@@ -10,6 +10,10 @@ from ..model.compatibility import slack_length
 from ..model.rotations import rotations_of
 from ..solution import ActuatorResult, ModuleResult, Solution
 
+#: a tension_only actuator with less tension than this fraction of its module's force scale is
+#: at the corner of its complementarity (taut with no tension: just taut, or an unpressurised
+#: McKibben muscle); the smoothing leaves about 1e-9 of it there
+CORNER = 1e-6
 #: a global balance residual above this (relative to the forces in play) is reported
 BALANCE_TOLERANCE = 1e-6
 
@@ -47,9 +51,11 @@ def _outline(shape, a, b, points):
     return polygon
 
 
-def actuator_result(actuator, module_res, tension, length, parameter):
+def actuator_result(actuator, module_res, tension, length, parameter, force_scale=1.0):
     """:class:`ActuatorResult`: the path ``p + R r`` over the actuator's span; ``parameter`` is
-    the actuator's temperature, tension or displacement."""
+    the actuator's temperature, tension or displacement; ``force_scale`` [N] its module's
+    ``EI / L^2`` (a ``tension_only`` actuator with less than :data:`CORNER` of it is at the
+    corner of its complementarity)."""
     s_a, s_b = actuator.route.span
     tol = 1e-12 * max(1.0, s_b)
     inside = (module_res.s >= s_a - tol) & (module_res.s <= s_b + tol)
@@ -67,7 +73,8 @@ def actuator_result(actuator, module_res, tension, length, parameter):
         free_stroke=None if free is None else float(free), path=path,
         control=actuator.control, tension_only=actuator.tension_only, displacement=own["displacement"],
         slack_length=slack_length(actuator, stroke, float(tension), float(parameter)),
-        pressure=own["pressure"], input=own["input"], heated=bool(law is not None and law.heated(parameter)))
+        pressure=own["pressure"], input=own["input"], heated=bool(law is not None and law.heated(parameter)),
+        at_corner=bool(actuator.tension_only and abs(float(tension)) <= CORNER * force_scale))
 
 
 def physics_warnings(robot, actuators, params):
@@ -98,7 +105,7 @@ def build_solution(robot, params, module_data, tensions, lengths, result, method
     for k, actuator in enumerate(robot.actuators):
         parameter = params[robot.layout[actuator.parameter]][0]
         actuators[actuator.key] = actuator_result(actuator, modules[actuator.module], tensions[k],
-                                                  lengths[k], parameter)
+                                                  lengths[k], parameter, robot.modules[actuator.module].force_scale)
     warnings = physics_warnings(robot, actuators, params)
     balance = global_balance(robot, modules, params, tensions, extra_loads)
     if result.success and balance.relative > BALANCE_TOLERANCE:

@@ -42,8 +42,6 @@ class StepFailure:
 
 #: a change of the state below this fraction of its size is the solver's noise
 NOISE = 1e-9
-#: a tension_only actuator with less than this fraction of the largest tension is at its corner
-CORNER = 1e-6
 #: the trapezoid test's error is relative to at least this fraction of the state's size
 SMALL_STEP = 1e-5
 
@@ -136,9 +134,7 @@ def _slack_pattern(solution):
     """Per ``tension_only`` actuator: slack, at the corner (taut with no tension: an
     unpressurised McKibben muscle, a tendon just taut) or taut. The branch has a corner where
     this changes."""
-    tensions = [abs(a.tension) for a in solution.actuators.values()]
-    small = CORNER * max(tensions, default=0.0)
-    return tuple("slack" if a.slack else ("corner" if a.tension <= small else "taut")
+    return tuple("slack" if a.slack else ("corner" if a.at_corner else "taut")
                  for a in solution.actuators.values() if a.tension_only)
 
 

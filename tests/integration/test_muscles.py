@@ -340,3 +340,30 @@ def test_a_mckibben_muscle_s_geometry_fits_from_tip_measurements():
     assert result.converged, result.message
     for q, value in zip(result.parameters, truth.values()):
         assert_allclose(q.value, value, rtol=1e-6)
+
+
+def test_a_user_law_travels_to_study_workers(tmp_path, capsys):
+    """Worker processes rebuild the scenario from a mapping: the law's folder (the scenario
+    file's, written down absolute by the loader) goes with it."""
+    from tca_casadi import cli
+    code = cli.main(["study", str(Path("scenarios/bending_module_custom.yaml").resolve()),
+                     "--vary", "bending.m1.input=0:2:3", "--vary", "bending.m2.input=0:2:2", "--workers", "2",
+                     "--no-plot", "--quiet", "-o", str(tmp_path / "study")])
+    assert code == 0, capsys.readouterr().err
+    import json
+    report = json.loads((tmp_path / "study" / "study.json").read_text())
+    assert report["converged"] == 6 and report["failed"] == 0, report
+
+
+def test_a_monte_carlo_over_sma_constants_converges_everywhere(tmp_path, capsys):
+    """Each sample starts from the reference state, where the tension-only wires sit at the
+    corner of their complementarity (taut, no tension): continuation must take that corner."""
+    from tca_casadi import cli
+    code = cli.main(["study", "scenarios/bending_module_sma.yaml", "--set", "bending.sma1.temperature=74",
+                     "--monte-carlo", "muscle_types.flexinol.A_f=normal:78:1",
+                     "--monte-carlo", "muscle_types.flexinol.E_A=uniform:70e9:90e9", "--samples", "12",
+                     "--no-plot", "--quiet", "-o", str(tmp_path / "mc")])
+    assert code == 0, capsys.readouterr().err
+    import json
+    report = json.loads((tmp_path / "mc" / "study.json").read_text())
+    assert report["converged"] == 12, report

@@ -11,10 +11,13 @@ names a function that builds the residual from named CasADi symbols::
 ``muscle_types.NAME.parameters.KEY``, so sweeps, studies and fits reach them). The expression
 must be zero on the law and positive when the path is longer than the free actuator at that
 tension; ``scale`` (default 1) is its natural size. The function is called once per robot
-build; the module is imported from the Python path or, failing that, from the scenario's folder.
+build; the module is imported from the Python path or, failing that, from ``folder`` (default,
+and relative to, the scenario file's folder; the loader writes it down absolute, so the law is
+found wherever the scenario travels as a mapping).
 """
 from dataclasses import dataclass, field
 import functools
+from typing import Optional
 import importlib
 import math
 import sys
@@ -41,15 +44,15 @@ class CustomLaw(ActuatorLaw):
 
     KIND = "custom"
     INPUT = ("input", "dimensionless", 0.0)
-    OPTIONS = {"entry_point": (str, ...), "parameters": (dict[str, float], {}),
+    OPTIONS = {"entry_point": (str, ...), "folder": (Optional[str], None), "parameters": (dict[str, float], {}),
                "scale": ("dimensionless", 1.0), "min_input": ("dimensionless", -math.inf),
                "max_input": ("dimensionless", math.inf)}
 
     @classmethod
-    def from_type(cls, config, reference_length, folder=None, **context):
-        function = residual_function(config.entry_point, tuple(config.parameters), folder)
+    def from_type(cls, config, reference_length, **context):
+        function = residual_function(config.entry_point, tuple(config.parameters), config.folder)
         return cls(reference_length, config.entry_point, dict(config.parameters), config.scale,
-                   config.min_input, config.max_input, function, folder)
+                   config.min_input, config.max_input, function, config.folder)
 
     @classmethod
     def parameter_entries(cls, config):
