@@ -292,6 +292,38 @@ def muscle_rates(repeats, steps):
     return out
 
 
+CONTACT = {"tendon robot": ("tendon_robot", "tendon_robot_wall", "body.t1.displacement"),
+           "propped cantilever": (None, "analytic/propped_cantilever", "gravity")}
+
+
+def contact_rates(repeats):
+    """Solve times with contact against without: build, cold (continuation from the reference
+    state, localisation, error estimate) and a warm solve after a 1 % change of the load
+    (``Simulation.solve`` from the last answer)."""
+    from tca_casadi.solvers.collocation import clear_built_solvers
+    out = {}
+    for label, (plain, touching, path) in CONTACT.items():
+        for key, name in (("without", plain), ("with", touching)):
+            if name is None:
+                continue
+            row = {}
+            row["build_s"], row["cold_s"], sim, cold = first_solves(SCENARIOS / f"{name}.yaml", repeats)
+            sim.set_parameter(path, sim.get_parameter(path) * 1.01)
+            row["warm_s"], warm = median_time(lambda: sim.solve(warm_start=cold, warn=False), max(repeats, 5))
+            row["converged"] = bool(cold.converged and warm.converged)
+            row["contacts"] = len(warm.contacts)
+            row["unknowns"] = int(sim.solver().nlp.w.numel())
+            out[f"{label} {key} contact"] = row
+            clear_built_solvers()
+    return out
+
+
+def print_contact(rates):
+    for label, r in rates.items():
+        print(f"{label}: {r['unknowns']} unknowns, build {r['build_s']:.3f} s, cold {r['cold_s'] * 1e3:.1f} ms, "
+              f"warm {r['warm_s'] * 1e3:.2f} ms, {r['contacts']} contact(s){'' if r['converged'] else ' NOT CONVERGED'}")
+
+
 def check_times(names):
     """``tca-casadi check`` on shipped scenarios: collocation and shooting seconds, agreement."""
     from tca_casadi.studies import check
@@ -353,9 +385,12 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("-o", "--output", type=Path, default=ROOT / "results" / "bench.json")
     parser.add_argument("--muscles", action="store_true", help="only the other muscles' rows (results/bench_muscles.json)")
+    parser.add_argument("--contact", action="store_true", help="only the contact rows (results/bench_contact.json)")
     args = parser.parse_args(argv)
     if args.muscles:
         return _muscles_only(args)
+    if args.contact:
+        return _contact_only(args)
     if args.quick:
         plan = {"bending_module": (1, 11, 1, 2)}
     else:
@@ -419,16 +454,24 @@ def print_muscles(muscles):
 
 
 def _muscles_only(args):
-    muscles = muscle_rates(args.repeats, 35)
-    print_muscles(muscles)
+    return _only(args, "muscles", muscle_rates(args.repeats, 35), print_muscles)
+
+
+def _contact_only(args):
+    return _only(args, "contact", contact_rates(1 if args.quick else args.repeats), print_contact)
+
+
+def _only(args, name, rates, printer):
+    """Print one group's ``rates`` and write them, with the machine, to ``bench_NAME.json``."""
+    printer(rates)
     machine = {"date": date.today().isoformat(), "cpus": _cpus(), "python": platform.python_version(),
                "platform": platform.platform()}
     print(f"measured {machine['date']} on {machine['cpus']} CPUs, Python {machine['python']}")
-    output = args.output.with_name("bench_muscles.json")
+    output = args.output.with_name(f"bench_{name}.json")
     output.parent.mkdir(parents=True, exist_ok=True)
-    output.write_text(json.dumps({"machine": machine, "muscles": muscles}, indent=2))
+    output.write_text(json.dumps({"machine": machine, name: rates}, indent=2))
     print(f"wrote {output}")
-    return muscles
+    return rates
 
 
 def _cpus():

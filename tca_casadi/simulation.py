@@ -19,6 +19,7 @@ from .scenario.overrides import apply_overrides
 from .solvers import CollocationSolver, ShootingSolver
 from .solvers import accuracy
 from .solvers.continuation import BranchFollower
+from .solvers.localisation import localise
 from .status import SolveStatus, Status
 
 log = logging.getLogger(__name__)
@@ -118,16 +119,24 @@ class Simulation:
         solver = self.solver(method)
         continuation = continuation or self.scenario.solver.continuation
         initial = self.last if warm_start == "last" else warm_start
+        if initial is None:
+            self.robot.check_clear(self.robot.rest_parameters(self.params))
         if continuation == "always" or (continuation == "auto" and initial is None):
             solution = self.continue_from_rest(solver)
             if not solution.converged and continuation == "auto":
                 solution = _better(solver.solve(self.params), solution)
+        elif self.robot.obstacles and continuation == "auto" and solver.has_square_system:
+            solution = self._solve_from(solver, initial)       # contact: closing is a corner
         else:
             solution = solver.solve(self.params, initial)
             if continuation == "auto" and _needs_continuation(solution):
                 solution = _better(solution, self.continue_from_rest(solver))
         if initial is None and solution.converged and solver.estimates_error:
             solver, solution, _ = accuracy.control(solver, solution, self.params, refine)
+            self._solvers[method or self.method] = solver
+        if solution.converged and (solution.penetration > self.robot.contact_tolerance or self.robot.added_contacts) \
+                and solver.estimates_error:
+            solver, solution = localise(self, solver, solution)         # contacts between candidates
             self._solvers[method or self.method] = solver
         self.last = solution
         if warn:
@@ -170,6 +179,7 @@ class Simulation:
         warm-started solves for shooting; failed steps are halved down to ``min_step``."""
         started = time.perf_counter()
         target, rest = self.params.copy(), self.robot.rest_parameters(self.params)
+        self.robot.check_clear(rest)
         solution = solver.solve(rest)
         if not solution.converged:
             return solution
@@ -184,6 +194,25 @@ class Simulation:
             solve_time_s=time.perf_counter() - started, nit=iterations)
         return solution
 
+
+    def _solve_from(self, solver, initial):
+        """A warm solve of a robot with contacts: Newton (or IPOPT, ``solver.algorithm: ipopt``)
+        from ``initial``, then (a contact that closes or opens on the way is a corner Newton may
+        not turn) continuation from
+        ``initial``'s parameters to these, then from the reference state when that is clear of
+        every obstacle, IPOPT last."""
+        ipopt = solver.options.algorithm == "ipopt"
+        solution = solver.solve_ipopt(self.params, initial) if ipopt else \
+            solver.solve_newton(self.params, solver.initial_guess(self.params, initial))
+        start = initial.parameters
+        if _needs_continuation(solution) and initial.converged and start is not None and start.size == self.params.size:
+            follow = _follow_branch(solver, start, self.params.copy(), initial, 0.25, 1e-3)
+            solution = _better(solution, follow[0] if follow[1] == 1.0 else solution)
+        if _needs_continuation(solution) and self.robot.is_clear(self.robot.rest_parameters(self.params)):
+            solution = _better(solution, self.continue_from_rest(solver))
+        if _needs_continuation(solution) and not ipopt:
+            solution = _better(solution, solver.solve_ipopt(self.params, initial))
+        return solution
 
     def _stalled(self, solver, reached, rest, target, lam, min_step, last_failure, iterations, elapsed):
         """The unconverged result of a continuation that stopped at ``lam``: the state it reached,

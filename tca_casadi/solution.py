@@ -80,6 +80,37 @@ class ActuatorResult:
 
 
 @dataclass
+class ContactResult:
+    """One closed contact (a candidate whose normal force is not zero; issue 17): where, the
+    obstacle's outward normal, the forces [N] and the gap [m] (global frame, SI). Frictionless
+    contacts carry no tangential force; ``friction_margin = friction f_n - |f_t|`` [N]."""
+    module: str
+    s: float
+    obstacle: str
+    position: np.ndarray      # (3,) the outline point in contact
+    normal: np.ndarray        # (3,) the obstacle's outward normal (the force on the rod is along it)
+    normal_force: float
+    tangential_force: np.ndarray
+    gap: float
+    friction: float
+
+    @property
+    def force(self):
+        """The total force on the rod (3,) [N]."""
+        return self.normal_force * self.normal + self.tangential_force
+
+    @property
+    def friction_margin(self):
+        return float(self.friction * self.normal_force - np.linalg.norm(self.tangential_force))
+
+    def as_dict(self):
+        return {"module": self.module, "s": self.s, "obstacle": self.obstacle,
+                "position": np.asarray(self.position).tolist(), "normal": np.asarray(self.normal).tolist(),
+                "normal_force": self.normal_force, "tangential_force": np.asarray(self.tangential_force).tolist(),
+                "gap": self.gap, "friction": self.friction, "friction_margin": self.friction_margin}
+
+
+@dataclass
 class Solution:
     """An equilibrium (or a failed attempt: ``converged`` is False, never hidden).
 
@@ -99,6 +130,12 @@ class Solution:
     balance: Optional[object] = None   # model.balance.GlobalBalance of the whole robot
     loads: list = field(default_factory=list)   # point loads and masses: {name, kind, position, force}
     accuracy: Optional[object] = None  # solvers.accuracy.AccuracyEstimate (cold collocation solves)
+    contacts: list = field(default_factory=list)   # ContactResult of every closed contact
+    #: per obstacle, the body's nearest approach on a fine sampling: {name: {gap, module, s}}
+    clearance: dict = field(default_factory=dict)
+    obstacles: list = field(default_factory=list)  # the fixed shapes (model.obstacles), for drawings
+    #: per contact candidate, True on the closed side of its complementarity's corner
+    contact_pattern: tuple = ()
 
     # ------------------------------------------------------------------ status
     @property
@@ -152,6 +189,12 @@ class Solution:
         """``{MODULE.ACTUATOR: tension [N]}``."""
         return {key: a.tension for key, a in self.actuators.items()}
 
+    @property
+    def penetration(self):
+        """How deep [m] the body cuts into any obstacle (0 when clear), on a fine sampling."""
+        gaps = [c["gap"] for c in self.clearance.values()]
+        return float(max(0.0, -min(gaps))) if gaps else 0.0
+
     def raise_if_failed(self):
         """Raise :class:`SolverError` (keeping this solution) unless converged."""
         if not self.converged:
@@ -181,6 +224,9 @@ class Solution:
                            if self.parameter_names is not None else {}),
             "global_balance": self.balance.as_dict() if self.balance is not None else None,
             "accuracy": self.accuracy.as_dict() if self.accuracy is not None else None,
+            "contacts": [c.as_dict() for c in self.contacts],
+            "clearance": self.clearance,
+            "penetration": self.penetration,
             "warnings": self.warning_texts(),
             "warning_kinds": [w.kind for w in self.warnings],
         }
@@ -228,6 +274,15 @@ class Solution:
             more = "".join(f"{getattr(a, name) * scale:11.5g}" if getattr(a, name) is not None else f"{'-':>11}"
                            for name, _, scale in extra)
             lines.append(f"  {key:<22}{temp}{pull}{a.tension * 1e3:11.4f}{a.stroke * 1e3:13.4f}{free}{slack}{more}")
+        if self.clearance:
+            lines.append(f"  {'contact':<22}{'s [mm]':>9}{'f_n [mN]':>11}{'gap [um]':>10}  position [mm]")
+            for c in self.contacts:
+                where = " ".join(signed(x * 1e3) for x in c.position)
+                lines.append(f"  {c.module + ' / ' + c.obstacle:<22}{c.s * 1e3:9.3f}{c.normal_force * 1e3:11.4f}"
+                             f"{c.gap * 1e6:10.4f}  {where}")
+            if not self.contacts:
+                nearest = min(self.clearance.items(), key=lambda item: item[1]["gap"])
+                lines.append(f"  no contact; nearest obstacle {nearest[0]!r} {nearest[1]['gap'] * 1e3:.4g} mm away")
         lines += [f"  warning: {w}" for w in self.warnings]
         if not self.converged and not self.warning_texts("not_converged"):
             lines.append(f"  message: {self.message}")

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..model import boundary
 from ..model.compatibility import compatibility_residuals
+from ..model.contact import contact_geometry, normal_contact, outline_size
 from ..model.loads import distributed_fields, is_active
 from ..model.rod import STATE_SIZE, rod_equations
 from .mesh import CollocationScheme, build_mesh
@@ -54,9 +55,11 @@ class CollocationNLP:
         self._viscous_ends = {}                # module -> viscous wrench at its tip (dynamics)
         self._partial_exprs = []
         self._ends, self._base_wrenches = [], []
+        self._node_at = {}                     # module -> {breakpoint s: deviation state there}
         for m in range(len(robot.modules)):
             self._module_constraints(m)
         self._compatibility()
+        self._contact_conditions()
         g = ca.vertcat(*self._g)
         self.problem = {"x": self.w, "p": self.P, "f": ca.MX(0), "g": g}
         self.outputs = ca.Function(
@@ -100,6 +103,11 @@ class CollocationNLP:
         blocks.append(ca.MX.sym("F", len(unknowns)))
         scales.append(np.array([self.robot.modules[a.module].force_scale for a in unknowns]))
         self.tension_index = offset + np.arange(len(unknowns))
+        offset += len(unknowns)
+        contacts = self.robot.contacts
+        blocks.append(ca.MX.sym("f_contact", len(contacts)))
+        scales.append(np.array([self.robot.modules[c.module].force_scale for c in contacts]))
+        self.contact_index = offset + np.arange(len(contacts))
         self.w = ca.vertcat(*blocks)
         self.scale = np.concatenate(scales)
         # deviation states [p, h, u - u*, v - v*] in SI units, per interval (13, d+1)
@@ -107,7 +115,8 @@ class CollocationNLP:
         for m, block in enumerate(blocks[:len(self.meshes)]):
             matrix = ca.reshape(block, STATE_SIZE, -1)
             self._states.append(ca.diag(ca.DM(self.node_scale[m])) @ matrix)
-        self._tensions = blocks[-1] * ca.DM(scales[-1]) if len(unknowns) else ca.MX(0, 1)
+        self._tensions = blocks[-2] * ca.DM(scales[-2]) if len(unknowns) else ca.MX(0, 1)
+        self._contact_forces = blocks[-1] * ca.DM(scales[-1]) if len(contacts) else ca.MX(0, 1)
 
     @property
     def parameter_size(self):
@@ -119,6 +128,10 @@ class CollocationNLP:
         if actuator.unknown_tension:
             return self._tensions[self.robot.unknowns.index(actuator)]
         return self.P[self.robot.layout[actuator.parameter]][0]
+
+    def contact_of(self, contact):
+        """Symbolic normal force [N] of a contact (:class:`~tca_casadi.model.contact.ContactModel`)."""
+        return self._contact_forces[contact.index]
 
     def param(self, name):
         return self.P[self.robot.layout[name]]
@@ -174,6 +187,8 @@ class CollocationNLP:
             viscous = (viscous_ends[:, :-1], viscous[:, starts])
         self._link_intervals(m, ends, X[:, starts], viscous)
         self._ends.append(ends[:, -1])
+        self._node_at[m] = {s0: X[:, i * (d + 1)] for i, (s0, _) in enumerate(mesh.intervals)} | \
+            {module.length: ends[:, -1]}
         self._module_end(m, ends[:, -1])
 
     def _inertial_loads(self, m, Xc, colloc):
@@ -242,7 +257,7 @@ class CollocationNLP:
 
     # ------------------------------------------------------------------ point wrenches
     def _point_wrenches(self, m, s, before, after):
-        return boundary.point_wrenches(self.robot, m, s, before, after, self.tension_of, self.param)
+        return boundary.point_wrenches(self.robot, m, s, before, after, self.tension_of, self.param, self.contact_of)
 
     def _wrench(self, m, x):
         """Internal wrench ``K (xi - xi*)`` [N m; N] of a deviation state."""
@@ -254,7 +269,7 @@ class CollocationNLP:
     def _base_wrench(self, m, start):
         """Internal wrench just before the module's base, ``W(0-) = W(0+) + point wrenches``."""
         return boundary.base_wrench(self.robot, m, start, self.tension_of, self.param, self._viscous_start(m),
-                                    self._base_inertia(m))
+                                    self._base_inertia(m), self.contact_of)
 
     # ------------------------------------------------------------------ links
     def _link_intervals(self, m, ends, starts, viscous=None):
@@ -290,12 +305,22 @@ class CollocationNLP:
             self._g.append(start[H_] - quaternion)
         viscous = {c: self._viscous_start(c) for c in starts} | {m: self._viscous_ends.get(m)}
         extra = {c: self._base_inertia(c) for c in starts} | {m: self._tip_inertia(m)}
-        balance = boundary.tip_balance(self.robot, m, end, starts, self.tension_of, self.param, viscous, extra)
+        balance = boundary.tip_balance(self.robot, m, end, starts, self.tension_of, self.param, viscous, extra,
+                                       self.contact_of)
         self._g.append(balance * self._wrench_scale(m))
 
     # ------------------------------------------------------------------ TCA law
     def _compatibility(self):
         self._g.extend(compatibility_residuals(self.robot, self._lengths, self.tension_of, self.param))
+
+    def _contact_conditions(self):
+        """One scaled complementarity per contact (:func:`~tca_casadi.model.contact.normal_contact`)
+        on the gap at its candidate's node."""
+        for c in self.robot.contacts:
+            module = self.robot.modules[c.module]
+            node = self._node_at[c.module][_breakpoint(self._node_at[c.module], c.s)]
+            g, _, _ = contact_geometry(self.robot.obstacle_of(c.obstacle, self.param), module, node)
+            self._g.append(normal_contact(self.contact_of(c), g, module.force_scale, outline_size(module)))
 
     # ------------------------------------------------------------------ helpers for solvers
     def node_s(self, m):
@@ -308,6 +333,11 @@ class CollocationNLP:
         steps = np.diff(np.array(self.meshes[m].intervals), axis=1).ravel()
         weights = np.hstack([np.zeros((steps.size, 1)), steps[:, None] * self.scheme.weights[None, :]])
         return np.append(weights.ravel(), 0.0)
+
+
+def _breakpoint(nodes, s):
+    """The key of ``nodes`` ({s: ...}) nearest s (a contact candidate is a breakpoint)."""
+    return min(nodes, key=lambda key: abs(key - s))
 
 
 def _derivative_matrix(scheme, steps):

@@ -61,7 +61,8 @@ class ModuleMesh:
 
 
 def module_breakpoints(robot, index):
-    """Sorted arc lengths [m] where the solution may jump in strain: anchors, loads, ends."""
+    """Sorted arc lengths [m] where the solution may jump in strain: anchors, loads, contact
+    candidates, ends."""
     module = robot.modules[index]
     points = {0.0, module.length}
     for actuator in module.actuators:
@@ -72,6 +73,7 @@ def module_breakpoints(robot, index):
     for load in robot.distributed_loads:
         if load.module == index:
             points.update(load.span)
+    points.update(robot.contact_points(index))          # contact candidates (point forces)
     return _merge_close(sorted(points), 1e-12 * module.length)
 
 

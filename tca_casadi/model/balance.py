@@ -43,12 +43,13 @@ class GlobalBalance:
                 "relative": self.relative}
 
 
-def global_balance(robot, modules, params, tensions, extra_loads=None):
+def global_balance(robot, modules, params, tensions, extra_loads=None, contact_loads=None):
     """:class:`GlobalBalance` of a solution's ``modules`` (``ModuleResult`` list) at ``params``,
     with the actuators' ``tensions`` [N] (``robot.actuators`` order) in the scales: each
     actuator's internal loads are of the order of its tension (and its tension times the module's
     length for moments), so that is what a residual is small against. ``extra_loads``:
-    ``(points, forces, moments)`` (3, k) global, further loads (a dynamic step's inertia)."""
+    ``(points, forces, moments)`` (3, k) global, further loads (a dynamic step's inertia);
+    ``contact_loads``: ``{m: (points, forces)}`` (3, k) global, the contact forces on module m."""
     base = modules[0].p[:, 0]
     force, moment = modules[0].base_reaction["force"].copy(), modules[0].base_reaction["moment"].copy()
     pulls = [abs(float(t)) for t in tensions]
@@ -56,7 +57,8 @@ def global_balance(robot, modules, params, tensions, extra_loads=None):
     moment_scale = float(sum(p * robot.modules[a.module].length for p, a in zip(pulls, robot.actuators)))
     value = _values(robot, params)
     for m, result in enumerate(modules):
-        points, forces, moments = _module_loads(robot, m, result, modules, value)     # (3, k) each
+        points, forces, moments = _module_loads(robot, m, result, modules, value,
+                                                (contact_loads or {}).get(m))           # (3, k) each
         hanger = _decoupled_root(robot, m)
         if hanger is not None:           # a decoupled subtree: its net force at its attachment
             points = modules[robot.modules[hanger].parent].p[:, -1:]
@@ -74,9 +76,10 @@ def global_balance(robot, modules, params, tensions, extra_loads=None):
     return GlobalBalance(force, moment, force_scale, moment_scale)
 
 
-def _module_loads(robot, m, result, modules, value):
+def _module_loads(robot, m, result, modules, value, contacts=None):
     """``(points, forces, moments)``, each (3, k): every external load on module m (global
-    frame), its self-weight as one load per quadrature node."""
+    frame), its self-weight as one load per quadrature node, ``contacts`` ``(points, forces)``
+    (3, k) its contact forces."""
     module, g, w = robot.modules[m], value("gravity"), result.weights
     loads = [(result.p, module.weight_density * np.outer(g, w), np.zeros((3, w.size)))]
     if module.connector is not None and module.connector.mass > 0:
@@ -89,6 +92,8 @@ def _module_loads(robot, m, result, modules, value):
     for load in robot.distributed_loads:
         if load.module == m:
             loads.append(_distributed_load(load, result, value))
+    if contacts is not None:
+        loads.append((contacts[0], contacts[1], np.zeros_like(contacts[1])))
     return tuple(np.hstack(parts) for parts in zip(*loads))
 
 

@@ -8,6 +8,7 @@ import casadi as ca
 import numpy as np
 
 from .arith import is_casadi
+from .contact import contact_wrench
 from .rod import ANCHOR_WRENCH, POINT_WRENCH
 from .rotations import quaternion_product, rotation_matrix
 
@@ -72,7 +73,7 @@ def _events_at(robot, m, s):
     mass acts there. Elsewhere the strains are continuous, so running actuators have no
     corner and are left out (that keeps the Jacobians sparse and the shots cheap)."""
     module, tol = robot.modules[m], 1e-12 * robot.modules[m].length
-    return bool(loads_at(robot, m, s)) or any(
+    return bool(loads_at(robot, m, s)) or bool(robot.contacts_at(m, s)) or any(
         abs(a.route.span[0] - s) <= tol or abs(a.route.span[1] - s) <= tol for a in module.actuators)
 
 
@@ -81,7 +82,7 @@ def loads_at(robot, m, s):
     return [load for load in robot.point_loads if load.module == m and abs(load.s - s) <= 1e-12 * module.length]
 
 
-def point_wrenches(robot, m, s, before, after, tension, param):
+def point_wrenches(robot, m, s, before, after, tension, param, contact=None):
     """Sum of the point wrenches applied at arc length s of module m, or ``None`` if none is.
 
     Each actuator present at s pulls the body with ``F (t+ - t-)`` at ``r(s)``, ``t-``/``t+`` its
@@ -89,8 +90,9 @@ def point_wrenches(robot, m, s, before, after, tension, param):
     anchor), ``-F t-`` where it ends, and the corner force ``F (t+ - t-)`` where it runs through
     a point at which the strains jump (a point load, another actuator's anchor). This is the
     delta part of the distributed load ``F q = F R^T t'`` (SPEC section 3) at a jump of ``t``.
-    Point loads and masses are added. ``before``/``after`` (deviation states either side of s)
-    may be None at the module's ends.
+    Point loads and masses are added, and the contacts at s (``contact(c)``: the normal force
+    [N] of :class:`~tca_casadi.model.contact.ContactModel` c; :func:`.contact.contact_wrench`).
+    ``before``/``after`` (deviation states either side of s) may be None at the module's ends.
     """
     module, total = robot.modules[m], None
     if after is not None:
@@ -102,6 +104,9 @@ def point_wrenches(robot, m, s, before, after, tension, param):
     h = (after if after is not None else before)[H_]
     for load in loads_at(robot, m, s):
         total = add(total, point_load_wrench(load, h, param))
+    state = after if after is not None else before
+    for c in robot.contacts_at(m, s):
+        total = add(total, contact_wrench(robot.obstacle_of(c.obstacle, param), module, state, contact(c)))
     return total
 
 
@@ -154,26 +159,26 @@ def child_wrench(end, child, base_wrench, param):
     return total
 
 
-def base_wrench(robot, m, start, tension, param, viscous=None, extra=None):
+def base_wrench(robot, m, start, tension, param, viscous=None, extra=None, contact=None):
     """``W(0-)`` of module m: the internal wrench at its start plus the point wrenches there
     (what its base support, or its parent's tip, carries). Dynamics: ``viscous``, the viscous
     part of the internal wrench at the start, and ``extra``, further applied wrenches there
     (point masses' inertia), (6,) each or None."""
     internal = add(internal_wrench(robot.modules[m], start, param), viscous)
-    return add(add(internal, point_wrenches(robot, m, 0.0, None, start, tension, param)), extra)
+    return add(add(internal, point_wrenches(robot, m, 0.0, None, start, tension, param, contact)), extra)
 
 
-def tip_balance(robot, m, end, starts, tension, param, viscous=None, extra=None):
+def tip_balance(robot, m, end, starts, tension, param, viscous=None, extra=None, contact=None):
     """``W(L) - point wrenches at L - sum of what the children in ``starts`` ({child: start
     state}) put on the tip`` (parent tip frame, SPEC section 5): zero at equilibrium when every
     child is included; with some left out, what those must carry. Dynamics: ``viscous``, the
     viscous parts of the internal wrenches, and ``extra``, further applied wrenches (inertia of
     point and connector masses), each ``{m: at the tip (its frame), c: at child c's base}``."""
     module, viscous, extra = robot.modules[m], viscous or {}, extra or {}
-    applied = add(point_wrenches(robot, m, module.length, end, None, tension, param), extra.get(m))
+    applied = add(point_wrenches(robot, m, module.length, end, None, tension, param, contact), extra.get(m))
     balance = add(internal_wrench(module, end, param), viscous.get(m)) - add(ca.DM.zeros(6), applied)
     for c, start in starts.items():
-        base = base_wrench(robot, c, start, tension, param, viscous.get(c), extra.get(c))
+        base = base_wrench(robot, c, start, tension, param, viscous.get(c), extra.get(c), contact)
         balance = balance - child_wrench(end, robot.modules[c], base, param)
     return balance
 

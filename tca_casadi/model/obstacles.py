@@ -44,6 +44,8 @@ from .arith import is_casadi
 
 #: smoothing of |x| and of the disc's square root, relative (a gap moves by less than this x a)
 SMOOTHING = 1e-9
+#: a rectangle's contact point slides from corner to corner over this tilt [rad] (:func:`contact_point`)
+ARM_SMOOTHING = 1e-3
 
 
 def _ops(*values):
@@ -95,6 +97,10 @@ class Shape:
 
 
 def _constant(array):
+    """A CasADi constant of ``array``, or ``array`` itself when it is already symbolic (an
+    obstacle's position as an NLP parameter)."""
+    if is_casadi(array):
+        return array
     import casadi as ca
     return ca.DM(np.asarray(array, float))
 
@@ -123,6 +129,8 @@ class Sphere(Shape):
         x = _column(x, symbolic)
         offset = x - (_constant(self.position) if symbolic else self.position)
         length = ops.sqrt(_dot(offset, offset, symbolic))
+        if not symbolic and length == 0.0:            # at the centre: every direction is the normal
+            return -self.radius, np.array([0.0, 0.0, 1.0])
         return length - self.radius, offset / length
 
 
@@ -137,6 +145,8 @@ class Cylinder(Shape):
         q = self.local(x, symbolic)
         across = q[0] * q[0] + q[1] * q[1]
         length = ops.sqrt(across)
+        if not symbolic and length == 0.0:            # on the axis: every radial direction is the normal
+            return -self.radius, self.to_global(np.array([1.0, 0.0, 0.0]), False)
         radial = (ops.vertcat(q[0], q[1], 0) if symbolic else np.array([q[0], q[1], 0.0])) / length
         return length - self.radius, self.to_global(radial, symbolic)
 
@@ -150,7 +160,7 @@ class Box(Shape):
         ops, symbolic = _ops(x)
         x = _column(x, symbolic)
         q_local = self.local(x, symbolic)
-        half = np.asarray(self.size, float) / 2
+        half = self.size / 2 if is_casadi(self.size) else np.asarray(self.size, float) / 2
         if not symbolic:
             sign = np.where(q_local >= 0, 1.0, -1.0)
             q = np.abs(q_local) - half
@@ -164,7 +174,7 @@ class Box(Shape):
             return float(q[k]), self.rotation @ normal
         import casadi as ca
         sign = ca.sign(q_local) + (q_local == 0)      # +1 on a face's plane, like numpy's branch
-        q = ca.fabs(q_local) - ca.DM(half)
+        q = ca.fabs(q_local) - _constant(half)
         outside = ca.fmax(q, 0)
         length = ca.norm_2(outside)
         deepest = ca.fmax(ca.fmax(q[0], q[1]), q[2])
@@ -212,4 +222,11 @@ def contact_point(shape, outline, p, rotation):
         return p - outline.diameter / 2 * across / size
     d1, d2 = columns[0], columns[1]
     a, b = _dot(normal, d1, symbolic), _dot(normal, d2, symbolic)
-    return p - outline.width / 2 * ops.sign(a) * d1 - outline.height / 2 * ops.sign(b) * d2
+    return p - outline.width / 2 * _smooth_sign(a, ops) * d1 - outline.height / 2 * _smooth_sign(b, ops) * d2
+
+
+def _smooth_sign(x, ops):
+    """``sign(x)`` made continuous over ``|x| < ARM_SMOOTHING``: a rectangle pressed flat on a
+    face touches along an edge, and its contact point moves from one corner to the other as it
+    tilts through flat (a jump Newton cannot take) over a tilt of about that many radians."""
+    return x / ops.sqrt(x * x + ARM_SMOOTHING ** 2)

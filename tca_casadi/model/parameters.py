@@ -121,6 +121,10 @@ def _drop(data, path):
         data.pop(path[-1], None)
 
 
+#: an obstacle's sizes that are parameters (a grip-force map over object widths without rebuilding)
+OBSTACLE_SIZES = {"sphere": ("radius",), "cylinder": ("radius",), "box": ("size",)}
+
+
 def declare(scenario, actuators, point_loads, distributed):
     """``(layout, values)`` of ``scenario`` for a robot with these actuators and loads."""
     layout, values = ParameterLayout(), []
@@ -153,6 +157,10 @@ def declare(scenario, actuators, point_loads, distributed):
     for k, item in enumerate(scenario.objects):
         put(f"{item.name}.mass", item.mass, "mass", ("objects", k, "mass"), 0.0)
         put(f"{item.name}.held", float(item.held), "dimensionless", ("objects", k, "held"), 0.0)
+    for k, obstacle in enumerate(scenario.obstacles):      # moved without a rebuild (a grasp, a study)
+        put(f"obstacles.{obstacle.name}.position", obstacle.position, "length", ("obstacles", k, "position"))
+        for key in OBSTACLE_SIZES.get(obstacle.shape, ()):
+            put(f"obstacles.{obstacle.name}.{key}", getattr(obstacle, key), "length", ("obstacles", k, key))
     positions = {load.name: k for k, load in enumerate(scenario.loads)}
     for load in point_loads + distributed:
         if load.kind == "object":

@@ -217,7 +217,8 @@ class ModuleModel:
 class Robot:
     """Modules in series from a base. Build with :meth:`from_scenario`."""
 
-    def __init__(self, modules, actuators, point_loads, distributed_loads, layout, values, name):
+    def __init__(self, modules, actuators, point_loads, distributed_loads, layout, values, name,
+                 obstacles=(), contacts=(), contact_tolerance=1e-8):
         self.modules = modules
         self.actuators = actuators
         self.point_loads = point_loads
@@ -225,6 +226,34 @@ class Robot:
         self.layout = layout
         self.values = values
         self.name = name
+        #: fixed rigid shapes (:mod:`.obstacles`) and the contact candidates against them
+        #: (:class:`.contact.ContactModel`, one per candidate point and obstacle)
+        self.obstacles = list(obstacles)
+        self.contacts = list(contacts)
+        #: a body cutting into an obstacle deeper than this [m] is a penetration (contact.tolerance)
+        self.contact_tolerance = contact_tolerance
+        #: ``{module index: (s, ...)}``: candidates localisation added (part of the structure)
+        self.added_contacts = {}
+
+    def obstacle_of(self, k, param):
+        """Obstacle k at the parameters: its position ``obstacles.NAME.position`` and its size
+        (``.radius`` of a sphere or cylinder, ``.size`` of a box)."""
+        from .parameters import OBSTACLE_SIZES
+        shape = self.obstacles[k]
+        kind = type(shape).__name__.lower()
+        sizes = {key: param(f"obstacles.{shape.name}.{key}") for key in OBSTACLE_SIZES.get(kind, ())}
+        if "radius" in sizes:
+            sizes["radius"] = sizes["radius"][0]
+        return replace(shape, position=param(f"obstacles.{shape.name}.position"), **sizes)
+
+    def contacts_at(self, m, s):
+        """The contacts at arc length s of module m."""
+        tol = 1e-12 * self.modules[m].length
+        return [c for c in self.contacts if c.module == m and abs(c.s - s) <= tol]
+
+    def contact_points(self, m):
+        """Sorted candidate arc lengths [m] of module m."""
+        return sorted({c.s for c in self.contacts if c.module == m})
 
     @property
     def unknowns(self):
@@ -268,8 +297,10 @@ class Robot:
         return [a for a in self.actuators if a.thermal]
 
     @classmethod
-    def from_scenario(cls, scenario):
-        """Model of a validated scenario; raises ScenarioError for a route outside the body."""
+    def from_scenario(cls, scenario, added=None):
+        """Model of a validated scenario; raises ScenarioError for a route outside the body.
+        ``added``: ``{module index:
+        [s, ...]}``, contact candidates localisation added (:mod:`tca_casadi.solvers.localisation`)."""
         modules, actuators = [], []
         names = [config.name for config in scenario.modules]
         for index, config in enumerate(scenario.modules):
@@ -284,7 +315,28 @@ class Robot:
                 actuators.append(actuator)
         point_loads, distributed = _loads(scenario)
         layout, values = declare(scenario, actuators, point_loads, distributed)
-        return cls(modules, actuators, point_loads, distributed, layout, values, scenario.name)
+        obstacles, contacts = _contacts(scenario, modules, added or {})
+        robot = cls(modules, actuators, point_loads, distributed, layout, values, scenario.name, obstacles, contacts,
+                    scenario.contact.tolerance)
+        robot.added_contacts = {m: tuple(sorted(points)) for m, points in (added or {}).items() if points}
+        return robot
+
+    def is_clear(self, params):
+        """False when an obstacle cuts the reference configuration at ``params`` (:meth:`check_clear`)."""
+        from ..errors import ScenarioError
+        try:
+            self.check_clear(params)
+        except ScenarioError:
+            return False
+        return True
+
+    def check_clear(self, params):
+        """ScenarioError if an obstacle cuts the reference configuration at ``params`` (the
+        unloaded robot, where a cold solve starts) by more than 1e-9 m: naming the obstacle,
+        the module, how deep and where. A grasp that the closed robot would cut starts from an
+        open configuration instead (a sequence step, a warm start)."""
+        if self.obstacles:
+            _check_clear(self.at(params), np.asarray(params, float))
 
     def parameter_vector(self, scenario):
         """Parameter values of ``scenario`` (same structure as this robot)."""
@@ -299,7 +351,7 @@ class Robot:
 
     def structure_key(self, scenario):
         """A hashable summary of everything that is *not* a parameter (rebuild when it changes)."""
-        return repr(self.layout.structure(scenario.model_dump(mode="json")))
+        return repr((self.layout.structure(scenario.model_dump(mode="json")), sorted(self.added_contacts.items())))
 
     def param_function(self, params):
         """``param(name)`` -> the (n,) numeric value of a layout entry in ``params``."""
@@ -308,7 +360,7 @@ class Robot:
 
     def at(self, params):
         """The robot with every parameter-dependent attribute (stiffness, weight density, routes,
-        laws, reference lengths) evaluated at ``params``; same structure and layout (the last
+        laws, reference lengths, obstacle positions) evaluated at ``params``; same structure and layout (the last
         few are kept: post-processing asks for the same parameters repeatedly)."""
         params = np.asarray(params, float)
         key = self._without_drive_values(params)
@@ -319,7 +371,8 @@ class Robot:
             cache[key] = self._evaluated(params)
         evaluated = cache[key]
         return Robot(evaluated.modules, evaluated.actuators, self.point_loads, self.distributed_loads, self.layout,
-                     params, self.name)
+                     params, self.name, evaluated.obstacles, self.contacts,
+                     self.contact_tolerance)
 
     def _without_drive_values(self, params):
         """``params`` (bytes) with each actuator's own value (TCA temperature, tendon tension or
@@ -342,8 +395,10 @@ class Robot:
                             reference_length=float(actuator.reference_length_of(param)))
             modules[actuator.module].actuators.append(moved)
             actuators.append(moved)
+        obstacles = [self.obstacle_of(k, param) for k in range(len(self.obstacles))]
         return Robot(modules, actuators, self.point_loads, self.distributed_loads, self.layout,
-                     np.asarray(params, float), self.name)
+                     np.asarray(params, float), self.name, obstacles, self.contacts,
+                     self.contact_tolerance)
 
     def problems(self, params):
         """What is physically impossible at ``params`` (a list of messages, empty if none):
@@ -374,6 +429,11 @@ class Robot:
                 out.append(f"module {module.name}: E = {youngs:g} Pa and G = {shear:g} Pa must be positive")
             if module.weight_density_of(param) < 0:
                 out.append(f"module {module.name}: the density must not be negative")
+        for k, shape in enumerate(self.obstacles):
+            placed = self.obstacle_of(k, param)
+            size = np.atleast_1d(getattr(placed, "radius", None) if hasattr(placed, "radius") else getattr(placed, "size", 1.0))
+            if np.any(np.asarray(size, float) <= 0):
+                out.append(f"obstacles[{shape.name}]: its size must be positive (got {np.asarray(size).tolist()} m)")
         for actuator in self.actuators:
             if actuator.is_muscle:
                 out.extend(actuator.law_of(param).structural_problems(actuator.key))
@@ -470,3 +530,43 @@ def _loads(scenario):
             point.append(PointLoadModel(item.name, index, scenario.modules[index].length, "global",
                                         "object", 1.0 / len(item.held_by)))
     return point, distributed
+
+
+def _contacts(scenario, modules, added):
+    """``(obstacles, contacts)``: the shapes of ``scenario.obstacles`` and one
+    :class:`.contact.ContactModel` per candidate point of each module and obstacle."""
+    if not scenario.obstacles:
+        return [], []
+    from .contact import ContactModel, candidate_points, shape_of
+    obstacles = [shape_of(config) for config in scenario.obstacles]
+    names = [module.name for module in modules]
+    given = {names.index(name): points for name, points in scenario.contact.at.items()}
+    contacts = []
+    for m, module in enumerate(modules):
+        for s in candidate_points(module.length, scenario.contact.points, given.get(m, ()), added.get(m, ())):
+            for k in range(len(obstacles)):
+                contacts.append(ContactModel(m, float(s), k, len(contacts)))
+    return obstacles, contacts
+
+
+#: samples per module when checking that no obstacle cuts the reference configuration
+CLEAR_SAMPLES = 401
+
+
+def _check_clear(robot, values):
+    """ScenarioError if an obstacle already cuts a module's reference configuration (by more
+    than 1e-9 m): naming the obstacle, the module, how deep and where."""
+    from ..errors import ScenarioError
+    from ..solvers.guess import reference_chain
+    from .contact import gaps, outline_of
+    samples = [np.linspace(0.0, module.length, CLEAR_SAMPLES) for module in robot.modules]
+    for m, states in enumerate(reference_chain(robot, values, samples)):
+        module = robot.modules[m]
+        for shape in robot.obstacles:
+            found = gaps(shape, outline_of(module), states[0:3], states[3:7])
+            j = int(np.argmin(found))
+            if found[j] < -1e-9:
+                raise ScenarioError(
+                    f"obstacles[{shape.name}]: intersects module {module.name!r} in its reference configuration "
+                    f"by {-found[j] * 1e3:.4g} mm at s = {samples[m][j] * 1e3:.4g} mm, where a cold solve starts: move it "
+                    "clear, or start from a configuration clear of it (a sequence step, a warm start)")

@@ -3,7 +3,8 @@ active muscles) red, passive ones green, tendons orange, cross-sections blue; ob
 import numpy as np
 
 COLORS = {"heated": "#d62728", "passive": "#2ca02c", "tendon": "#ff7f0e",
-          "section": "#1f77b4", "centerline": "black", "object": "#7f7f7f", "held": "#9467bd"}
+          "section": "#1f77b4", "centerline": "black", "object": "#7f7f7f", "held": "#9467bd",
+          "obstacle": "#8c8c8c", "contact": "#e377c2"}
 
 
 def finish(plt, fig, path, dpi=110):
@@ -52,6 +53,10 @@ def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_point
         ax.plot(*(_smooth(actuator.path) * 1e3), color=COLORS[kind], linewidth=1.6,
                 linestyle=":" if actuator.slack else "-", label=f"{key} ({word}, {force})")
     everything += _draw_loads(ax, solution.loads, np.hstack(everything))
+    everything += _draw_contacts(ax, solution.contacts, np.hstack(everything))
+    extent = np.hstack(everything)
+    for shape in solution.obstacles:
+        everything += draw_obstacle(ax, shape, extent)
     for pose in objects:
         corners = pose.corners() * 1e3
         color = COLORS["held" if pose.held else "object"]
@@ -111,6 +116,57 @@ def _draw_loads(ax, loads, points):
                       label=f"{load['name']} ({np.linalg.norm(load['force']) * 1e3:.3g} mN)")
             drawn.append(np.column_stack([at, at + arrow]))
     return drawn
+
+
+def _draw_contacts(ax, contacts, points):
+    """Contact forces on the rods as arrows (a fifth of the drawing for the largest)."""
+    size = float(np.max(np.ptp(points, axis=1))) if points.size else 1.0
+    largest = max((c.normal_force for c in contacts), default=0.0)
+    drawn = []
+    for k, contact in enumerate(contacts):
+        at = np.asarray(contact.position) * 1e3
+        arrow = contact.force * 0.2 * size / largest
+        ax.quiver(*(at - arrow), *arrow, color=COLORS["contact"], linewidth=1.8, arrow_length_ratio=0.25,
+                  label=f"contact forces (largest {largest * 1e3:.3g} mN)" if k == 0 else None)
+        drawn.append(np.column_stack([at - arrow, at]))
+    return drawn
+
+
+def draw_obstacle(ax, shape, points, resolution=24):
+    """A fixed obstacle as a light wireframe, cut to the drawing's extent (planes and cylinders
+    are unbounded); returns the points drawn (mm)."""
+    low, high = points.min(axis=1), points.max(axis=1)
+    center, half = (low + high) / 2, max(float(np.max(high - low)) / 2, 1.0) * 1.1
+    kind = type(shape).__name__
+    style = {"color": COLORS["obstacle"], "linewidth": 0.6, "alpha": 0.7}
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, resolution), np.linspace(-1, 1, resolution // 2))
+    if kind == "Sphere":
+        r, c = shape.radius * 1e3, shape.position * 1e3
+        x, y, z = (c[0] + r * np.cos(u) * np.sqrt(1 - v ** 2), c[1] + r * np.sin(u) * np.sqrt(1 - v ** 2), c[2] + r * v)
+    elif kind == "Cylinder":
+        r, c = shape.radius * 1e3, shape.position * 1e3
+        along = (center - c) @ shape.rotation[:, 2]
+        local = np.stack([r * np.cos(u), r * np.sin(u), along + half * v])
+        x, y, z = np.einsum("ij,jkl->ikl", shape.rotation, local) + c[:, None, None]
+    elif kind == "Plane":
+        n = shape.normal / np.linalg.norm(shape.normal)
+        a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
+        a /= np.linalg.norm(a)
+        b = np.cross(n, a)
+        foot = center - ((center - shape.position * 1e3) @ n) * n
+        grid = np.linspace(-half, half, 9)
+        x, y, z = (foot[:, None, None] + a[:, None, None] * grid[None, :, None] + b[:, None, None] * grid[None, None, :])
+    else:                                                              # Box
+        half_edges = shape.size * 1e3 / 2
+        signs = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
+        corners = shape.position[:, None] * 1e3 + shape.rotation @ (signs * half_edges).T
+        for i in range(8):
+            for j in range(i + 1, 8):
+                if np.sum(signs[i] != signs[j]) == 1:
+                    ax.plot(*corners[:, [i, j]], **style, label=shape.name if (i, j) == (0, 1) else None)
+        return [corners]
+    ax.plot_wireframe(x, y, z, rstride=1, cstride=1, label=shape.name, **style)
+    return [np.vstack([x.ravel(), y.ravel(), z.ravel()])] if kind == "Sphere" else []
 
 
 def style_axes(ax, ticks=4):

@@ -3,7 +3,7 @@
 import numpy as np
 
 from ..output import save_figure
-from .robot3d import _equal_axes, _pyplot, _smooth, style_axes
+from .robot3d import _equal_axes, _pyplot, _smooth, draw_obstacle, style_axes
 
 
 #: marker, dash pattern and size per curve, so that curves lying on each other stay visible
@@ -77,6 +77,9 @@ def plot_sweep_robots(result, path, count=5):
         for actuator in solution.actuators.values():
             style = "-" if actuator.kind == "tendon" or actuator.heated else "--"
             ax.plot(*(_smooth(actuator.path) * 1e3), style, color=colour, linewidth=0.8, alpha=0.8)
+    extent = np.hstack(everything)
+    for shape in result.points[chosen[-1]].solution.obstacles:      # fixed: drawn once
+        everything += draw_obstacle(ax, shape, extent)
     _equal_axes(ax, np.hstack(everything))
     style_axes(ax)
     ax.set_title("robot along the sweep (thick: centerline; thin: heated TCAs and tendons, "

@@ -38,7 +38,21 @@ def check_references(scenario, raw, sources):
             if holder not in module_names:
                 fail(raw, sources, ("objects", index, "held_by", k),
                      f"unknown module {holder!r}{closest(holder, module_names)}")
+    _unique_names(scenario.obstacles, ("obstacles",), raw, sources)
+    _check_contact(scenario, module_names, raw, sources)
     _check_timeline(scenario, raw, sources)
+
+
+def _check_contact(scenario, module_names, raw, sources):
+    """``contact.at``: known modules, arc lengths inside them."""
+    for name, points in scenario.contact.at.items():
+        if name not in module_names:
+            fail(raw, sources, ("contact", "at", name), f"unknown module {name!r}{closest(name, module_names)}")
+        length = scenario.modules[module_names.index(name)].length
+        for k, s in enumerate(points):
+            if s > length * (1 + 1e-12):
+                fail(raw, sources, ("contact", "at", name, k),
+                     f"s = {s * 1e3:g} mm is beyond the module's length ({length * 1e3:g} mm)")
 
 
 def _check_timeline(scenario, raw, sources):

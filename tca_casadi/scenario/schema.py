@@ -468,11 +468,78 @@ class GraspedObject(Strict):
     held_by: list[str] = Field(min_length=1)
     held: bool = False
 
+    _positive_size = model_validator(mode="after")(lambda self: _positive_edges(self))
+
+
+def _positive_edges(box):
+    """``box`` (an object or a box obstacle) when every edge of its ``size`` is positive."""
+    if min(box.size) <= 0:
+        raise ValueError("size: every edge must be positive")
+    return box
+
+
+# ----------------------------------------------------------------------------- obstacles
+Friction = Annotated[float, _quantity("dimensionless"), Field(ge=0)]
+
+
+class ObstacleBase(Strict):
+    """A fixed rigid shape the rods may touch (issue 17; ``docs/contact.md``): ``name``,
+    ``position`` [m] (global frame), ``friction`` (Coulomb's coefficient)."""
+    name: str = Field(min_length=1)
+    position: Vector3Length = (0.0, 0.0, 0.0)
+    friction: Friction = 0.0
+
+
+class PlaneObstacle(ObstacleBase):
+    """The half-space below the plane through ``position``; ``normal`` points out of it."""
+    shape: Literal["plane"]
+    normal: Vector3 = (0.0, 0.0, 1.0)
+
     @model_validator(mode="after")
-    def _positive_size(self):
-        if min(self.size) <= 0:
-            raise ValueError("size: every edge must be positive")
+    def _nonzero_normal(self):
+        if math.sqrt(sum(n * n for n in self.normal)) < 1e-12:
+            raise ValueError("normal must not be zero")
         return self
+
+
+class SphereObstacle(ObstacleBase):
+    """A ball of ``radius`` centred on ``position``."""
+    shape: Literal["sphere"]
+    radius: PositiveLength
+
+
+class CylinderObstacle(ObstacleBase):
+    """An infinitely long cylinder of ``radius`` about its frame's z axis (``orientation``
+    turns it), through ``position``: a post, a bar."""
+    shape: Literal["cylinder"]
+    radius: PositiveLength
+    orientation: Orientation = Field(default_factory=Orientation)
+
+
+class BoxObstacle(ObstacleBase):
+    """A box of edges ``size`` along its frame's axes (``orientation`` turns it), centred on
+    ``position``."""
+    shape: Literal["box"]
+    size: Vector3Length
+    orientation: Orientation = Field(default_factory=Orientation)
+
+    _positive_size = model_validator(mode="after")(lambda self: _positive_edges(self))
+
+
+Obstacle = Annotated[Union[PlaneObstacle, SphereObstacle, CylinderObstacle, BoxObstacle],
+                     Field(discriminator="shape")]
+
+
+class ContactOptions(Strict):
+    """Where contact is checked (``docs/contact.md``): each module's ends, ``points`` evenly
+    spaced points inside it and the arc lengths ``at`` lists per module (``{MODULE: [s, ...]}``)
+    are contact candidates against every obstacle; after a solve, the gap is sampled finely and
+    a candidate is added where the body still penetrates by more than ``tolerance``, up to
+    ``localise`` times."""
+    points: int = Field(default=8, ge=0, le=200)
+    at: dict[str, list[Annotated[float, _quantity("length"), Field(ge=0)]]] = Field(default_factory=dict)
+    tolerance: Annotated[float, _quantity("length"), Field(gt=0)] = 1e-8
+    localise: int = Field(default=8, ge=0, le=50)
 
 
 # ----------------------------------------------------------------------------- solver
@@ -609,6 +676,9 @@ class Scenario(Strict):
     modules: list[Module] = Field(min_length=1)
     loads: list[Load] = Field(default_factory=list)
     objects: list[GraspedObject] = Field(default_factory=list)
+    #: fixed rigid shapes the rods may touch, and where contact is checked (issue 17)
+    obstacles: list[Obstacle] = Field(default_factory=list)
+    contact: ContactOptions = Field(default_factory=ContactOptions)
     solver: SolverOptions = Field(default_factory=SolverOptions)
     inverse: Optional[InverseOptions] = None
     sequence: Optional[list[SequenceStep]] = None

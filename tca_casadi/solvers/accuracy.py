@@ -76,9 +76,10 @@ class AccuracyEstimate:
 
 
 def interpolate(source, w, target, params):
-    """Scaled variables of NLP ``target`` from the solution ``w`` of NLP ``source`` (same robot;
-    each target interval inside one source interval): the states' polynomials evaluated at the
-    target's nodes, the tensions copied, the partial lengths recomputed."""
+    """Scaled variables of NLP ``target`` from the solution ``w`` of NLP ``source`` (same robot,
+    or with contact candidates added; each target interval inside one source interval): the
+    states' polynomials evaluated at the target's nodes, the tensions and the contact forces
+    copied (a new candidate starts with none), the partial lengths recomputed."""
     out = np.zeros(target.scale.size)
     physical = np.asarray(w, float) * source.scale
     for m in range(len(source.meshes)):
@@ -90,17 +91,20 @@ def interpolate(source, w, target, params):
         owner = np.minimum(owner, len(src_intervals) - 1)
         s0, s1 = src_intervals[owner, 0], src_intervals[owner, 1]
         local = (tgt_s - s0[:, None]) / (s1 - s0)[:, None]           # (n_tgt, d_tgt + 1)
-        basis = _lagrange(source.scheme.tau, local)                  # (n_tgt, d_tgt + 1, d_src + 1)
+        basis = lagrange_basis(source.scheme.tau, local)                  # (n_tgt, d_tgt + 1, d_src + 1)
         values = np.einsum("tjr,tkr->tkj", basis, src_nodes[owner])  # (n_tgt, 13, d_tgt + 1)
         out[target.state_index[m]] = values
     out[target.tension_index] = physical[source.tension_index]
+    forces = {(c.module, c.s, c.obstacle): physical[source.contact_index[c.index]] for c in source.robot.contacts}
+    for c in target.robot.contacts:        # the same candidates, or (localisation) some added
+        out[target.contact_index[c.index]] = forces.get((c.module, c.s, c.obstacle), 0.0)
     out = out / target.scale
     partial = np.concatenate(target.partial_index) if target.partial_index else np.zeros(0, int)
     out[partial] = np.array(target.partials(out, params)).ravel()
     return out
 
 
-def _lagrange(nodes, points):
+def lagrange_basis(nodes, points):
     """Lagrange basis on ``nodes`` (k,) evaluated at ``points`` (..., ): shape (..., k)."""
     points = np.asarray(points)[..., None]
     out = np.ones(points.shape[:-1] + (nodes.size,))

@@ -7,8 +7,9 @@ import numpy as np
 from ..errors import PhysicsWarning
 from ..model.balance import global_balance, load_markers
 from ..model.compatibility import slack_length
+from ..model.contact import CLOSED, contact_geometry, gaps, outline_of, outline_size
 from ..model.rotations import rotations_of
-from ..solution import ActuatorResult, ModuleResult, Solution
+from ..solution import ActuatorResult, ContactResult, ModuleResult, Solution
 
 #: a tension_only actuator with less tension than this fraction of its module's force scale is
 #: at the corner of its complementarity (taut with no tension: just taut, or an unpressurised
@@ -92,13 +93,60 @@ def physics_warnings(robot, actuators, params):
     return out
 
 
-def build_solution(robot, params, module_data, tensions, lengths, result, method, raw, notices=(), extra_loads=None):
+def contact_results(robot, modules, module_data, forces, clearance=None):
+    """``(contacts, loads, clearance, warnings, pattern)`` of a solution with contacts: the
+    :class:`ContactResult` of every closed contact, ``{m: (points, forces)}`` (3, k) of all of
+    them for the global balance, per obstacle the body's nearest approach ``{name: {gap,
+    module, s}}`` (``clearance``, the solver's search between nodes; else the nearest node)
+    a penetration warning where the body cuts deeper than ``robot.contact_tolerance`` and, per
+    candidate, which side of its complementarity's corner it is on (``f / f_s > g / g_s``: the
+    equation's row is the gap's; continuation's corners)."""
+    closed, loads, found, warnings, pattern = [], {}, {}, [], []
+    for c in robot.contacts:
+        module, shape = robot.modules[c.module], robot.obstacles[c.obstacle]
+        s, states = module_data[c.module][0], module_data[c.module][1]
+        g, n, point = contact_geometry(shape, module, states[:, int(np.argmin(np.abs(s - c.s)))])
+        force = float(forces[c.index])
+        pattern.append(force / module.force_scale > float(g) / outline_size(module))
+        points, pushes = loads.setdefault(c.module, ([], []))
+        points.append(point)
+        pushes.append(force * n)
+        if force > CLOSED * module.force_scale:
+            closed.append(ContactResult(module.name, float(c.s), shape.name, point, n, force, np.zeros(3),
+                                        float(g), float(shape.friction)))
+    loads = {m: (np.array(p).T, np.array(f).T) for m, (p, f) in loads.items()}
+    for shape in robot.obstacles:
+        nearest = (clearance or {}).get(shape.name) or _nearest_node(robot, shape, module_data)
+        found[shape.name] = nearest
+        if nearest["gap"] < -robot.contact_tolerance:
+            warnings.append(PhysicsWarning(
+                "penetration", f"module {nearest['module']} cuts {-nearest['gap'] * 1e6:.3g} um into obstacle "
+                f"{shape.name!r} at s = {nearest['s'] * 1e3:.4g} mm, between contact candidates: add a point "
+                "there to contact.at or raise contact.points"))
+    return closed, loads, found, warnings, tuple(pattern)
+
+
+def _nearest_node(robot, shape, module_data):
+    """``{gap, module, s}``: the node of any module nearest ``shape``."""
+    best = None
+    for m, (s, states) in enumerate(data[:2] for data in module_data):
+        g = gaps(shape, outline_of(robot.modules[m]), states[0:3], states[3:7])
+        j = int(np.argmin(g))
+        if best is None or g[j] < best["gap"]:
+            best = {"gap": float(g[j]), "module": robot.modules[m].name, "s": float(s[j])}
+    return best
+
+
+def build_solution(robot, params, module_data, tensions, lengths, result, method, raw, notices=(), extra_loads=None,
+                   contact_forces=None, clearance=None):
     """Solution from ``module_data = [(s, states, base_wrench_body, weights), ...]``, tensions per
     actuator (list in ``robot.actuators`` order) and lengths; ``result`` the
     :class:`SolveStatus`, ``method`` the solver's name, ``raw`` its variables (``w`` or ``z``),
     ``notices`` the solver's own :class:`PhysicsWarning` s (e.g. a floored tolerance);
     ``extra_loads``: ``(points, forces, moments)`` (3, k) global, beyond the robot's own loads,
-    for the global balance (a dynamic step's inertial loads)."""
+    for the global balance (a dynamic step's inertial loads); ``contact_forces`` (n,) [N] the
+    normal force of each of ``robot.contacts`` and ``clearance`` the solver's nearest approach
+    to each obstacle (:func:`contact_results`)."""
     robot = robot.at(params)          # stiffness, routes, laws at these parameters
     modules = [module_result(robot.modules[m], *data) for m, data in enumerate(module_data)]
     actuators = {}
@@ -107,7 +155,12 @@ def build_solution(robot, params, module_data, tensions, lengths, result, method
         actuators[actuator.key] = actuator_result(actuator, modules[actuator.module], tensions[k],
                                                   lengths[k], parameter, robot.modules[actuator.module].force_scale)
     warnings = physics_warnings(robot, actuators, params)
-    balance = global_balance(robot, modules, params, tensions, extra_loads)
+    contacts, contact_loads, nearest, pattern = [], None, {}, ()
+    if robot.obstacles:
+        contacts, contact_loads, nearest, found, pattern = contact_results(robot, modules, module_data,
+                                                                           contact_forces, clearance)
+        warnings.extend(found)
+    balance = global_balance(robot, modules, params, tensions, extra_loads, contact_loads)
     if result.success and balance.relative > BALANCE_TOLERANCE:
         warnings.append(PhysicsWarning("global_balance", f"global balance off by {balance.relative:.1e} of the forces in play "
                         f"(force {np.abs(balance.force).max():.2e} N, moment "
@@ -120,7 +173,8 @@ def build_solution(robot, params, module_data, tensions, lengths, result, method
                     modules=modules, actuators=actuators, warnings=warnings,
                     parameters=np.array(params, float), parameter_names=dict(robot.layout.slices),
                     scenario_name=robot.name, tip_module=robot.tip_index, balance=balance,
-                    loads=load_markers(robot, modules, params))
+                    loads=load_markers(robot, modules, params), contacts=contacts, clearance=nearest, contact_pattern=pattern,
+                    obstacles=robot.obstacles)
 
 
 def not_converged(result):

@@ -9,12 +9,16 @@ import numpy as np
 
 from ..discretisation import CollocationNLP
 from ..status import SolveStatus, Status
+from . import accuracy
+from ..model.contact import gap_function, gaps, outline_of
 from .assemble import build_solution
 from .guess import reference_guess
 from .newton import BufferedFunction, SquareSystem
 
 log = logging.getLogger(__name__)
 
+#: samples per interval where contact gaps are checked between the nodes
+FINE_SAMPLES = 16
 #: built solvers kept for reuse, by (scenario name, structure key, meshes, degree); the oldest go
 BUILT_SOLVERS = 6
 _built = OrderedDict()
@@ -215,8 +219,62 @@ class CollocationSolver:
             else:
                 tensions.append(params[self.robot.layout[actuator.parameter]][0])
         robot_params = params[:self.robot.layout.size]
+        contact = {}
+        if self.robot.obstacles:
+            contact = {"contact_forces": w_phys[nlp.contact_index], "clearance": self.clearance(w, params)}
         return build_solution(self.robot, robot_params, module_data, tensions, lengths.ravel(), status,
-                              self.method, {"w": w}, extra_loads=self._extra_loads(w, params, module_data))
+                              self.method, {"w": w}, extra_loads=self._extra_loads(w, params, module_data), **contact)
+
+    def clearance(self, w, params):
+        """Per obstacle (placed at ``params``), the body's nearest approach ``{name: {gap [m],
+        module, s [m]}}``: every module's gap sampled at :data:`FINE_SAMPLES` points per
+        interval of its collocation polynomials, then minimised (bounded Brent) within a sample
+        spacing either side of each of the lowest sampled dips, so that a dip between samples (beside a closed candidate)
+        is found wherever it is."""
+        from scipy.optimize import minimize_scalar
+        out, fine = {}, self.fine_states(w)
+        for shape in self.robot.at(params[:self.robot.layout.size]).obstacles:
+            best = {"gap": np.inf}
+            for m, (s, states) in fine.items():
+                module = self.robot.modules[m]
+                g = gaps(shape, outline_of(module), states[0:3], states[3:7])
+                dips = [j for j in range(g.size) if g[j] <= g[max(j - 1, 0)] and g[j] <= g[min(j + 1, g.size - 1)]]
+                function, spacing = gap_function(shape, outline_of(module)), np.max(np.diff(s))
+                for j in sorted(dips, key=lambda j: g[j])[:4]:
+                    if g[j] < best["gap"]:
+                        best = {"gap": float(g[j]), "module": module.name, "s": float(s[j])}
+                    low, high = max(0.0, s[j] - spacing), min(module.length, s[j] + spacing)
+                    found = minimize_scalar(lambda x: float(function(*self._pose_at(w, m, x))), bounds=(low, high),
+                                            method="bounded", options={"xatol": 1e-12 * module.length})
+                    if found.fun < best["gap"]:
+                        best = {"gap": float(found.fun), "module": module.name, "s": float(found.x)}
+            out[shape.name] = best
+        return out
+
+    def _pose_at(self, w, m, s):
+        """``(p (3,), h (4,))`` of module m at arc length s from its collocation polynomial."""
+        nlp = self.nlp
+        intervals = np.array(nlp.meshes[m].intervals)
+        i = min(int(np.searchsorted(intervals[:, 1], s)), len(intervals) - 1)
+        nodes = (np.asarray(w, float) * nlp.scale)[nlp.state_index[m][i]]              # (13, d + 1)
+        state = nodes @ accuracy.lagrange_basis(nlp.scheme.tau, (s - intervals[i, 0]) / (intervals[i, 1] - intervals[i, 0]))
+        return state[0:3], state[3:7]
+
+    def fine_states(self, w, per_interval=FINE_SAMPLES):
+        """``{m: (s (n,), states (13, n))}``: every module's collocation polynomials sampled at
+        ``per_interval`` + 1 evenly spaced points of each interval (both ends included), the
+        states ``[p, h, ...]`` as the nodes hold them (where contact is checked between nodes)."""
+        nlp, out = self.nlp, {}
+        tau = np.linspace(0.0, 1.0, per_interval + 1)
+        basis = accuracy.lagrange_basis(nlp.scheme.tau, tau)                        # (k, d + 1)
+        physical = np.asarray(w, float) * nlp.scale
+        for m in range(len(self.robot.modules)):
+            nodes = physical[nlp.state_index[m]]                                    # (n_int, 13, d + 1)
+            values = np.einsum("kr,tir->tik", basis, nodes)                         # (n_int, 13, k)
+            steps = np.array(nlp.meshes[m].intervals)
+            s = steps[:, :1] + tau[None, :] * (steps[:, 1:] - steps[:, :1])        # (n_int, k)
+            out[m] = (s.ravel(), values.transpose(1, 0, 2).reshape(13, -1))
+        return out
 
     def _extra_loads(self, w, params, module_data):
         """Loads beyond the robot's own for the global balance (a dynamic step's inertia)."""

@@ -115,11 +115,13 @@ class BranchFollower:
             jump, crossed = np.inf, False
             if trial.converged:
                 candidate = self.point(lam, trial)
-                # where a tension-only actuator goes slack or taut the branch has a corner: the
-                # tangents on its two sides differ, so the trapezoid test does not apply
+                # where a tension-only actuator goes slack or taut, or a contact closes or opens,
+                # the branch has a corner: the tangents on its two sides differ, so the trapezoid
+                # test does not apply, and det J may change sign there without a fold (the
+                # complementarity's row turns from the force's to the gap's)
                 corner = _slack_pattern(current.solution) != _slack_pattern(trial)
                 jump = 0.0 if corner else self.inconsistency(current, candidate)
-                crossed = candidate.det_sign * current.det_sign < 0
+                crossed = not corner and candidate.det_sign * current.det_sign < 0
                 if jump <= self.jump_tolerance and not crossed:
                     current, substeps = candidate, substeps + 1
                     step = min(2 * step, max_step)
@@ -132,10 +134,12 @@ class BranchFollower:
 
 def _slack_pattern(solution):
     """Per ``tension_only`` actuator: slack, at the corner (taut with no tension: an
-    unpressurised McKibben muscle, a tendon just taut) or taut. The branch has a corner where
-    this changes."""
-    return tuple("slack" if a.slack else ("corner" if a.at_corner else "taut")
-                 for a in solution.actuators.values() if a.tension_only)
+    unpressurised McKibben muscle, a tendon just taut) or taut; then, per contact candidate,
+    which side of its complementarity's corner it is on. The branch has a corner where this
+    changes."""
+    actuators = tuple("slack" if a.slack else ("corner" if a.at_corner else "taut")
+                      for a in solution.actuators.values() if a.tension_only)
+    return actuators + tuple(solution.contact_pattern)
 
 
 class ArclengthFollower:

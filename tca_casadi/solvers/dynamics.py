@@ -156,6 +156,9 @@ class RodDynamics:
     def __init__(self, sim, integrator="bdf2", damping=None):
         if integrator not in INTEGRATORS:
             raise ScenarioError(f"dynamics.integrator: {integrator!r} is not one of {', '.join(INTEGRATORS)}")
+        if sim.robot.obstacles:
+            raise ScenarioError("obstacles: rod dynamics with contact is not modelled (yet); "
+                                "set dynamics.enabled: false for quasi-static steps")
         self.sim, self.integrator = sim, integrator
         static = sim.solver("collocation")
         self.solver = DynamicSolver(sim.robot, static.options, meshes=static.nlp.meshes, degree=static.degree)

@@ -28,7 +28,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import root
 
 from ..discretisation.mesh import module_breakpoints
-from ..errors import PhysicsWarning
+from ..errors import PhysicsWarning, ScenarioError
 from ..status import SolveStatus, Status
 from ..model import boundary
 from ..model.compatibility import compatibility_residuals
@@ -63,6 +63,9 @@ class ShootingSolver:
     estimates_error = False
 
     def __init__(self, robot, options, rtol=1e-11, atol=1e-12, jacobian="variational"):
+        if robot.obstacles:
+            raise ScenarioError("obstacles: the shooting solver does not model contact (yet); "
+                                "solve with solver.method: collocation")
         start = time.perf_counter()
         self.robot, self.options = robot, options
         self.rtol, self.atol = rtol, atol

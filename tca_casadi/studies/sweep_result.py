@@ -63,6 +63,9 @@ class SweepResult:
                 row[f"{key}.slack_length [m]"] = actuator.slack_length
             if actuator.free_stroke is not None:
                 row[f"{key}.free_stroke [m]"] = actuator.free_stroke
+        for name, nearest in solution.clearance.items():          # contact: per obstacle
+            row[f"{name}.normal_force [N]"] = sum(c.normal_force for c in solution.contacts if c.obstacle == name)
+            row[f"{name}.clearance [m]"] = nearest["gap"]
         for j, p in enumerate(self.parameters):
             for axis, value in zip("xyz", point.tip_derivative[:, j]):
                 row[f"dtip_{axis}/d{p.path} [m/{p.unit}]"] = value
@@ -120,10 +123,20 @@ def _format(value):
 
 
 # ---------------------------------------------------------------------- events
+def _contact_changes(a, b):
+    """``[(kind, text)]``: (module, obstacle) pairs in contact at ``b`` and not at ``a``
+    ("touch") or the reverse ("release")."""
+    before = {(c.module, c.obstacle) for c in a.contacts}
+    after = {(c.module, c.obstacle) for c in b.contacts}
+    out = [("touch", f"{module} touches {obstacle}") for module, obstacle in sorted(after - before)]
+    return out + [("release", f"{module} leaves {obstacle}") for module, obstacle in sorted(before - after)]
+
+
 def find_events(robot, points, parameters):
     """Events between consecutive points: a TCA tension changing sign or leaving the law's fit
-    range, a tension-only actuator going slack or becoming taut, the Jacobian's determinant
-    changing sign, a fold (lam turning back, arclength)."""
+    range, a tension-only actuator going slack or becoming taut, a module touching an obstacle
+    or leaving it, the Jacobian's determinant changing sign, a fold (lam turning back,
+    arclength)."""
     events = []
     if len(points) < 2:
         return events
@@ -158,6 +171,8 @@ def find_events(robot, points, parameters):
                 limit = 0.5 * (la + lb)
                 event("fit_range", between((fa - la) / ((fa - la) - (fb - lb))),
                       f"{actuator.key} tension crosses the fit's monotone limit {limit * 1e3:.4g} mN")
+        for kind, text in _contact_changes(a.solution, b.solution):
+            event(kind, between(0.5), text)
         if a.lam_rate * b.lam_rate < 0:
             event("fold", _turning_lambda(points, index),
                   "fold (turning point): the branch turns back; the Jacobian is singular there")

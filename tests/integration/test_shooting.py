@@ -8,6 +8,7 @@ from builders import mixed_chain, robot, rod, tca
 from conftest import SCENARIOS
 from tca_casadi import Simulation
 from tca_casadi.cli import main
+from tca_casadi.errors import ScenarioError
 from tca_casadi.solvers import shooting
 from tca_casadi.studies import check
 
@@ -24,7 +25,12 @@ def assert_agree(report):
 
 @pytest.mark.parametrize("path", SHIPPED, ids=[p.stem for p in SHIPPED])
 def test_every_shipped_scenario_agrees(path):
-    report, collocation, shooting = check(Simulation.from_file(path))
+    sim = Simulation.from_file(path)
+    if sim.robot.obstacles:               # contact is collocation's alone (issue 17): said, not skipped
+        with pytest.raises(ScenarioError, match="shooting solver does not model contact"):
+            check(sim)
+        return
+    report, collocation, shooting = check(sim)
     assert_agree(report)
     assert collocation.method == "collocation" and shooting.method == "shooting"
 
