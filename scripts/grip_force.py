@@ -71,7 +71,7 @@ def grip_map(widths, temperatures, progress=print):
             trial = sim.solve(warm_start=solution)
             elapsed = time.perf_counter() - start
             force = {finger: sum(c.normal_force for c in trial.contacts if c.module == finger) for finger in FINGERS}
-            rows.append({"width_mm": width * 1e3, "temperature_degC": temperature,
+            rows.append({"width_mm": round(width * 1e3, 9), "temperature_degC": temperature,
                          "finger_a_N": force["finger_a"], "finger_b_N": force["finger_b"],
                          "converged": bool(trial.converged), "penetration_m": trial.penetration, "solve_s": elapsed})
             progress(f"w = {width * 1e3:4.1f} mm, T = {temperature:5.1f} degC: grip {force['finger_a'] * 1e3:7.4f} / "

@@ -189,6 +189,15 @@ class Solution:
         """``{MODULE.ACTUATOR: tension [N]}``."""
         return {key: a.tension for key, a in self.actuators.items()}
 
+    def contact_columns(self):
+        """Per obstacle, table columns ``{"NAME.normal_force [N]": total normal force on it,
+        "NAME.clearance [m]": the body's nearest approach}`` (sweep and sequence tables)."""
+        out = {}
+        for name, nearest in self.clearance.items():
+            out[f"{name}.normal_force [N]"] = sum(c.normal_force for c in self.contacts if c.obstacle == name)
+            out[f"{name}.clearance [m]"] = nearest["gap"]
+        return out
+
     @property
     def penetration(self):
         """How deep [m] the body cuts into any obstacle (0 when clear), on a fine sampling."""

@@ -123,7 +123,7 @@ def gap_function(shape, outline):
     """CasADi Function ``(p (3,), h (4,)) -> g``: the gap [m] of :func:`gap` at a centerline
     point and quaternion, built once per shape and outline (kept by their description)."""
     import casadi as ca
-    key = (repr(shape), repr(outline))
+    key = _key(shape, outline)
     if key not in _GAP_FUNCTIONS:
         if len(_GAP_FUNCTIONS) > 256:
             _GAP_FUNCTIONS.clear()
@@ -133,10 +133,26 @@ def gap_function(shape, outline):
     return _GAP_FUNCTIONS[key]
 
 
+def _key(shape, outline):
+    """What a numeric shape and an outline are, as a hashable key (cheaper than their repr)."""
+    values = tuple(np.asarray(value, float).tobytes() for value in vars(shape).values()
+                   if not isinstance(value, str))
+    return (type(shape).__name__, values, outline.shape, getattr(outline, "diameter", None),
+            getattr(outline, "width", None), getattr(outline, "height", None))
+
+
+_MAPPED = {}
+
+
 def gaps(shape, outline, p, h):
     """Gaps [m] (n,) at centerline points ``p`` (3, n) with quaternions ``h`` (4, n)."""
     p, h = np.asarray(p, float).reshape(3, -1), np.asarray(h, float).reshape(4, -1)
-    return np.array(gap_function(shape, outline).map(p.shape[1])(p, h)).ravel()
+    key = (_key(shape, outline), p.shape[1])
+    if key not in _MAPPED:
+        if len(_MAPPED) > 1024:
+            _MAPPED.clear()
+        _MAPPED[key] = gap_function(shape, outline).map(p.shape[1])
+    return np.array(_MAPPED[key](p, h)).ravel()
 
 
 def normal_contact(force, g, force_scale, gap_scale):

@@ -61,13 +61,13 @@ def _slope_of(solver, w, placed):
     """``slope(m, name, s)``: d gap / d s [-] of module m against obstacle ``name`` at s, a
     central difference on the collocation polynomials either side of s (``placed``: the robot
     at the solve's parameters)."""
-    from ..model.contact import gap_function, outline_of
+    from ..model.contact import gaps, outline_of
     shapes = {shape.name: shape for shape in placed.obstacles}
 
     def slope(m, name, s):
         module = placed.modules[m]
-        function, step = gap_function(shapes[name], outline_of(module)), 1e-7 * module.length
-        ahead, behind = (float(function(*solver._pose_at(w, m, x))) for x in (s + step, s - step))
+        step = 1e-7 * module.length
+        ahead, behind = gaps(shapes[name], outline_of(module), *solver._poses_at(w, m, [s + step, s - step]))
         return (ahead - behind) / (2 * step)
     return slope
 

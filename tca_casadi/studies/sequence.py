@@ -69,6 +69,7 @@ class SequenceResult:
                 if actuator.temperature is not None:
                     row[f"{key}.temperature [degC]"] = actuator.temperature
                 row[f"{key}.tension [N]"] = actuator.tension
+            row.update(solution.contact_columns())
             if self.checks:
                 row["shooting_tip_difference [m]"] = self.checks[index].tip_position_difference
                 row["shooting_centerline_difference [m]"] = self.checks[index].max_centerline_distance

@@ -63,9 +63,7 @@ class SweepResult:
                 row[f"{key}.slack_length [m]"] = actuator.slack_length
             if actuator.free_stroke is not None:
                 row[f"{key}.free_stroke [m]"] = actuator.free_stroke
-        for name, nearest in solution.clearance.items():          # contact: per obstacle
-            row[f"{name}.normal_force [N]"] = sum(c.normal_force for c in solution.contacts if c.obstacle == name)
-            row[f"{name}.clearance [m]"] = nearest["gap"]
+        row.update(solution.contact_columns())
         for j, p in enumerate(self.parameters):
             for axis, value in zip("xyz", point.tip_derivative[:, j]):
                 row[f"dtip_{axis}/d{p.path} [m/{p.unit}]"] = value

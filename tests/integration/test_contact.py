@@ -100,8 +100,8 @@ def test_sphere_push_equals_a_point_load_of_the_reported_contact_force():
     reference_sim.use_meshes(sim.solver().nlp.meshes, sim.solver().degree)       # the same discretisation
     reference = reference_sim.solve(refine=False)
     s = np.linspace(0.0, 0.1, 201)
-    shape = np.array([sim.solver()._pose_at(solution.raw["w"], 0, x)[0] for x in s])
-    expected = np.array([reference_sim.solver()._pose_at(reference.raw["w"], 0, x)[0] for x in s])
+    shape = sim.solver()._poses_at(solution.raw["w"], 0, s)[0]
+    expected = reference_sim.solver()._poses_at(reference.raw["w"], 0, s)[0]
     assert_allclose(shape, expected, rtol=0, atol=1e-9)
 
 
@@ -276,3 +276,45 @@ def test_grip_force_script_quick(tmp_path):
     assert force[(4.0, 125.0)]["finger_a_N"] == 0.0 and force[(8.0, 125.0)]["finger_a_N"] == 0.0
     assert force[(8.0, 25.0)]["finger_a_N"] > force[(8.0, 75.0)]["finger_a_N"] > 0.0
     assert force[(8.0, 25.0)]["finger_a_N"] > force[(4.0, 25.0)]["finger_a_N"] > 0.0
+
+
+def test_sweep_reports_the_touch_and_the_growing_contact_force(tmp_path):
+    """A sweep of the push: the rod touches the ball once, then presses harder; the CSV carries
+    the force and the clearance, which closes to zero where the force appears."""
+    from tca_casadi import Sweep
+    scenario = pushed()       # against a wall: pressed on the ball, the rod's tip would slide round it (docs/contact.md)
+    scenario["obstacles"] = [{"name": "wall", "shape": "box", "size": ["4 mm", "40 mm", "200 mm"],
+                              "position": ["6.5 mm", 0, "50 mm"]}]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sim = Simulation.from_file(scenario)
+        result = Sweep(sim, "push.force.x", 0, "4 mN", steps=9).run()
+    assert result.completed, result.message
+    touches = [e for e in result.events if e["kind"] == "touch"]
+    assert len(touches) == 1 and "rod touches wall" in touches[0]["message"]
+    rows = result.rows()
+    forces = np.array([row["wall.normal_force [N]"] for row in rows])
+    clearance = np.array([row["wall.clearance [m]"] for row in rows])
+    assert forces[0] == 0.0 and forces[-1] > 0 and np.all(np.diff(forces) >= 0)
+    assert np.all(clearance[forces > 0] >= -1e-8) and np.all(np.abs(clearance[forces > 0]) < 1e-6)
+    assert np.all(clearance[forces == 0] > 0)
+
+
+def test_sequence_table_carries_each_obstacles_force_and_clearance(tmp_path):
+    """`sequence` on the wall scenario: the wall's force is zero until the pull brings the tip to
+    it, and the table says so step by step."""
+    import csv
+
+    import yaml
+    from conftest import SCENARIOS
+    from tca_casadi.cli import main
+    raw = yaml.safe_load((SCENARIOS / "tendon_robot_wall.yaml").read_text())
+    raw["modules"][0]["actuators"][0]["displacement"] = 0.0
+    raw["sequence"] = [{"name": "straight", "set": {}}, {"name": "pull", "set": {"body.t1.displacement": "5 mm"}}]
+    path = tmp_path / "sequence.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    assert main(["sequence", str(path), "-o", str(tmp_path / "out"), "--quiet"]) == 0
+    with open(tmp_path / "out" / "sequence.csv") as stream:
+        rows = list(csv.DictReader(stream))
+    assert float(rows[0]["wall.normal_force [N]"]) == 0.0 and float(rows[0]["wall.clearance [m]"]) > 9e-3
+    assert float(rows[1]["wall.normal_force [N]"]) > 0.01 and abs(float(rows[1]["wall.clearance [m]"])) < 1e-8
