@@ -104,6 +104,7 @@ def solution_row(sim, solution, outputs=()):
     for key, actuator in solution.actuators.items():
         row[f"{key}.tension [N]"] = float(actuator.tension)
         row[f"{key}.stroke [m]"] = float(actuator.stroke)
+    row.update({name: float(value) for name, value in solution.contact_columns().items()})
     for name in outputs:
         label, value = OUTPUTS[output_kind(name)][1](solution, name)
         row[label] = float(value)
@@ -122,6 +123,8 @@ def _empty_columns(sim, outputs):
     names = [f"tip_{a} [m]" for a in "xyz"] + [f"tip_q{a} [-]" for a in "wxyz"] + ["bending_angle [deg]"]
     for actuator in sim.robot.actuators:
         names += [f"{actuator.key}.tension [N]", f"{actuator.key}.stroke [m]"]
+    for shape in sim.robot.obstacles:
+        names += [f"{shape.name}.normal_force [N]", f"{shape.name}.clearance [m]"]
     names += [output_label(name) for name in outputs] + ["balance [-]"]
     return {name: float("nan") for name in names}
 

@@ -318,3 +318,17 @@ def test_sequence_table_carries_each_obstacles_force_and_clearance(tmp_path):
         rows = list(csv.DictReader(stream))
     assert float(rows[0]["wall.normal_force [N]"]) == 0.0 and float(rows[0]["wall.clearance [m]"]) > 9e-3
     assert float(rows[1]["wall.normal_force [N]"]) > 0.01 and abs(float(rows[1]["wall.clearance [m]"])) < 1e-8
+
+
+def test_study_rows_carry_each_obstacles_force_and_clearance():
+    """A grid study moving the wall (a parameter) under a fixed pull: the farther the wall, the
+    smaller its force, zero once it is out of reach; clearance zero where it presses."""
+    from conftest import SCENARIOS
+    from tca_casadi import Study
+    sim = Simulation.from_file(SCENARIOS / "tendon_robot_wall.yaml")
+    result = Study(sim, vary={"obstacles.wall.position.x": ["18 mm", "40 mm", 4]}).run()
+    frame = result.frame.sort_values("obstacles.wall.position.x [m]")
+    assert frame["converged"].all()
+    force, clearance = frame["wall.normal_force [N]"].to_numpy(), frame["wall.clearance [m]"].to_numpy()
+    assert np.all(np.diff(force) <= 0) and force[0] > 0.01 and force[-1] == 0.0
+    assert np.all(np.abs(clearance[force > 0]) < 1e-8) and clearance[-1] > 0.01
