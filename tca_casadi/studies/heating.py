@@ -47,12 +47,13 @@ class TimeSeries:
             columns += ["tip_vx [m/s]", "tip_vy [m/s]", "tip_vz [m/s]"] + [f"{name} [J]" for name in ENERGY_COLUMNS]
         for name in (self.objects[0] if self.objects else {}):
             columns += [f"{name}.held", f"{name}.x [m]", f"{name}.y [m]", f"{name}.z [m]"]
+        columns += list(self.solutions[0].contact_columns()) if self.solutions else []
         return columns + ["converged"]
 
     def rows(self):
         """``timeseries.csv`` rows: t, per TCA temperature, power (empty where not heated),
         tension, stroke; the tip position and quaternion; each object's held flag and centre;
-        converged."""
+        each obstacle's normal force and clearance; converged."""
         out = []
         for k, solution in enumerate(self.solutions):
             row = [f"{self.t[k]:.10g}"]
@@ -66,6 +67,7 @@ class TimeSeries:
                 row += [f"{v:.10g}" for v in self.tip_velocities[k]] + [f"{v:.10g}" for v in self.energies[k]]
             for pose in (self.objects[k].values() if self.objects else ()):
                 row += [int(pose.held)] + [f"{v:.10g}" for v in pose.center]
+            row += [f"{v:.10g}" for v in solution.contact_columns().values()]     # per obstacle
             out.append(row + [int(solution.converged)])
         return out
 

@@ -332,3 +332,27 @@ def test_study_rows_carry_each_obstacles_force_and_clearance():
     force, clearance = frame["wall.normal_force [N]"].to_numpy(), frame["wall.clearance [m]"].to_numpy()
     assert np.all(np.diff(force) <= 0) and force[0] > 0.01 and force[-1] == 0.0
     assert np.all(np.abs(clearance[force > 0]) < 1e-8) and clearance[-1] > 0.01
+
+
+def test_simulate_heats_the_module_against_a_wall_and_releases_it(tmp_path):
+    """`simulate` of the heating scenario beside a wall 1 mm from the body: the heated module
+    touches it, presses harder while heated, lets go while cooling; the timeseries says so."""
+    import csv
+
+    import yaml
+    from conftest import SCENARIOS
+    from tca_casadi.cli import main
+    raw = yaml.safe_load((SCENARIOS / "bending_module_heating.yaml").read_text())
+    raw["obstacles"] = [{"name": "wall", "shape": "plane", "position": ["-6 mm", 0, 0], "normal": [1, 0, 0]}]
+    path = tmp_path / "heating_wall.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    assert main(["simulate", str(path), "-o", str(tmp_path / "out"), "--quiet", "--no-animation"]) == 0
+    with open(tmp_path / "out" / "timeseries.csv") as stream:
+        rows = list(csv.DictReader(stream))
+    t = np.array([float(row["t [s]"]) for row in rows])
+    force = np.array([float(row["wall.normal_force [N]"]) for row in rows])
+    clearance = np.array([float(row["wall.clearance [m]"]) for row in rows])
+    assert_allclose(clearance[0], 1e-3, rtol=0, atol=1e-8)         # the envelope's 5 mm radius, 1 mm clear
+    assert force[t <= 10].max() == 0.0 and force[(t >= 25) & (t <= 40)].min() > 0 and force[-1] == 0.0
+    assert np.all(np.diff(force[(t >= 20) & (t <= 40)]) > 0)            # heated: pressing harder
+    assert np.all(np.abs(clearance[force > 0]) < 1e-8) and np.all(clearance >= -1e-8)
