@@ -126,9 +126,11 @@ def _centerline_distance(ma, mb):
 
 def check(simulation, position_tolerance=POSITION_TOLERANCE, tension_tolerance=TENSION_TOLERANCE):
     """Solve ``simulation`` by collocation and (independently, from a cold start) by shooting.
-    The solutions' warnings are in the report (not issued)."""
+    The solutions' warnings are in the report (not issued). The shooting solver is built first,
+    so that what it cannot model (contact) stops the check before any solve."""
+    shooting_solver = simulation.solver("shooting")
     collocation = simulation.solve(method="collocation", warn=False)
-    simulation.solver("shooting").sample_s = [m.s for m in collocation.modules]
+    shooting_solver.sample_s = [m.s for m in collocation.modules]
     shooting = simulation.solve(method="shooting", warn=False)
     report = compare_solutions(collocation, shooting, position_tolerance, tension_tolerance)
     return report, collocation, shooting
