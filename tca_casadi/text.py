@@ -7,8 +7,9 @@ def shorten(value, limit=80):
 
 
 def clip(text, limit=80):
-    """``text`` cut to about ``limit`` characters (a name or path echoed in a message)."""
-    text = str(text)
+    """``text`` cut to about ``limit`` characters (a name or path echoed in a message), its
+    control characters escaped (a stray line break must not split a one-line error)."""
+    text = "".join(ch if ch.isprintable() else repr(ch)[1:-1] for ch in str(text))
     return text if len(text) <= limit else text[:limit - 3] + "..."
 
 

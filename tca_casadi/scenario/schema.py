@@ -9,6 +9,7 @@ from typing import Annotated, Literal, Optional, Union
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, create_model, model_validator
 
+from ..text import shorten
 from ..units import to_si
 
 
@@ -19,7 +20,7 @@ def _quantity(kind):
 def _vector(kind, size):
     def convert(value):
         if not isinstance(value, (list, tuple)):
-            raise ValueError(f"expected a list of {size} values, got {value!r}")
+            raise ValueError(f"expected a list of {size} values, got {shorten(value)}")
         if len(value) != size:
             raise ValueError(f"expected a list of {size} values, got {len(value)}")
         return tuple(to_si(item, kind) for item in value)

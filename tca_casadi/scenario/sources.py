@@ -41,7 +41,7 @@ def format_path(path, raw):
         else:
             text += f".{part}" if text else str(part)
             node = node.get(part) if isinstance(node, dict) else None
-    return text or "(top level)"
+    return clip(text, 200) or "(top level)"
 
 
 def did_you_mean(word, options, none="; none are defined", listing="; known: "):

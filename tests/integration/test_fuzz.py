@@ -21,7 +21,8 @@ from tca_casadi.model import Robot
 from tca_casadi.scenario import load_scenario
 
 LONG = os.environ.get("TCA_FUZZ") == "long"
-SHIPPED = ["bending_module", "twisting_module", "tendon_robot", "tendon_robot_two_segments", "arm_pick_and_place"]
+SHIPPED = ["bending_module", "twisting_module", "tendon_robot", "tendon_robot_two_segments", "arm_pick_and_place",
+           "tendon_robot_wall"]
 ROOT = Path(__file__).resolve().parents[2]
 RAW = {name: yaml.safe_load((ROOT / "scenarios" / f"{name}.yaml").read_text()) for name in SHIPPED}
 
@@ -82,7 +83,8 @@ def test_mutated_scenarios_give_only_clean_errors(name, choice, action, value):
     mutated = _mutate(raw, paths[choice % len(paths)], action, value)
     try:
         scenario = load_scenario(mutated) if isinstance(mutated, dict) else load_scenario(yaml.safe_dump(mutated))
-        Robot.from_scenario(scenario)
+        robot = Robot.from_scenario(scenario)
+        robot.check_clear(robot.rest_parameters(robot.values))      # where a cold solve starts (obstacles)
     except ScenarioError as error:
         _check_clean(error)
 
@@ -96,7 +98,8 @@ def test_random_set_values_give_only_clean_errors(name, choice, text, path):
     names = [f"{m['name']}.{a['name']}.temperature" for m in raw["modules"] for a in m.get("actuators", [])]
     dotted = path if path is not None else (known + names)[choice % len(known + names)]
     try:
-        Robot.from_scenario(load_scenario(raw, [f"{dotted}={text}"]))
+        robot = Robot.from_scenario(load_scenario(raw, [f"{dotted}={text}"]))
+        robot.check_clear(robot.rest_parameters(robot.values))
     except ScenarioError as error:
         _check_clean(error)
 
