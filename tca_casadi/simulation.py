@@ -119,7 +119,7 @@ class Simulation:
         solver = self.solver(method)
         continuation = continuation or self.scenario.solver.continuation
         initial = self.last if warm_start == "last" else warm_start
-        if initial is None:
+        if initial is None and continuation == "never":      # continuation checks it itself
             self.robot.check_clear(self.robot.rest_parameters(self.params))
         if continuation == "always" or (continuation == "auto" and initial is None):
             solution = self.continue_from_rest(solver)

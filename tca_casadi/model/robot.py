@@ -21,7 +21,7 @@ from ..scenario.checks import fail, route_span
 from .laws import muscle_module, muscles
 from .laws.tca import TcaLaw
 from .laws.tendon import TendonLaw
-from .parameters import ParameterLayout, declare  # noqa: F401  (ParameterLayout: re-exported)
+from .parameters import OBSTACLE_SIZES, ParameterLayout, declare  # noqa: F401  (ParameterLayout: re-exported)
 from .routes import ANGLE_KEY, make_route, reference_path_length
 from .sections import outside_point, section_properties, stiffness_diagonal
 
@@ -238,7 +238,6 @@ class Robot:
     def obstacle_of(self, k, param):
         """Obstacle k at the parameters: its position ``obstacles.NAME.position`` and its size
         (``.radius`` of a sphere or cylinder, ``.size`` of a box)."""
-        from .parameters import OBSTACLE_SIZES
         shape = self.obstacles[k]
         kind = type(shape).__name__.lower()
         sizes = {key: param(f"obstacles.{shape.name}.{key}") for key in OBSTACLE_SIZES.get(kind, ())}
@@ -431,9 +430,10 @@ class Robot:
                 out.append(f"module {module.name}: the density must not be negative")
         for k, shape in enumerate(self.obstacles):
             placed = self.obstacle_of(k, param)
-            size = np.atleast_1d(getattr(placed, "radius", None) if hasattr(placed, "radius") else getattr(placed, "size", 1.0))
-            if np.any(np.asarray(size, float) <= 0):
-                out.append(f"obstacles[{shape.name}]: its size must be positive (got {np.asarray(size).tolist()} m)")
+            for key in OBSTACLE_SIZES.get(type(shape).__name__.lower(), ()):
+                size = np.atleast_1d(np.asarray(getattr(placed, key), float))
+                if np.any(size <= 0):
+                    out.append(f"obstacles[{shape.name}]: its {key} must be positive (got {size.tolist()} m)")
         for actuator in self.actuators:
             if actuator.is_muscle:
                 out.extend(actuator.law_of(param).structural_problems(actuator.key))

@@ -257,31 +257,31 @@ class CollocationSolver:
         return out
 
     def _poses_at(self, w, m, s):
-        """``(p (3, n), h (4, n))`` of module m at arc lengths ``s`` (n,) from its collocation
-        polynomials (a point on a breakpoint from the interval after it)."""
+        """``(p (3, n), h (4, n))`` of module m at arc lengths ``s`` (n,) (:meth:`states_at`)."""
+        states = self.states_at(w, m, s)
+        return states[0:3], states[3:7]
+
+    def states_at(self, w, m, s):
+        """States (13, n) of module m at arc lengths ``s`` (n,) from its collocation polynomials,
+        as the nodes hold them (a point on a breakpoint from the interval after it)."""
         nlp = self.nlp
         s = np.atleast_1d(np.asarray(s, float))
         intervals = np.array(nlp.meshes[m].intervals)
         i = np.minimum(np.searchsorted(intervals[:, 1], s, side="right"), len(intervals) - 1)
         nodes = (np.asarray(w, float) * nlp.scale)[nlp.state_index[m][i]]            # (n, 13, d + 1)
         local = (s - intervals[i, 0]) / (intervals[i, 1] - intervals[i, 0])
-        states = np.einsum("nir,nr->in", nodes, accuracy.lagrange_basis(nlp.scheme.tau, local))
-        return states[0:3], states[3:7]
+        return np.einsum("nir,nr->in", nodes, accuracy.lagrange_basis(nlp.scheme.tau, local))
 
     def fine_states(self, w, per_interval=FINE_SAMPLES):
         """``{m: (s (n,), states (13, n))}``: every module's collocation polynomials sampled at
-        ``per_interval`` + 1 evenly spaced points of each interval (both ends included), the
-        states ``[p, h, ...]`` as the nodes hold them (where contact is checked between nodes)."""
-        nlp, out = self.nlp, {}
+        ``per_interval`` + 1 evenly spaced points of each interval (both ends included; where
+        contact is checked between nodes)."""
         tau = np.linspace(0.0, 1.0, per_interval + 1)
-        basis = accuracy.lagrange_basis(nlp.scheme.tau, tau)                        # (k, d + 1)
-        physical = np.asarray(w, float) * nlp.scale
+        out = {}
         for m in range(len(self.robot.modules)):
-            nodes = physical[nlp.state_index[m]]                                    # (n_int, 13, d + 1)
-            values = np.einsum("kr,tir->tik", basis, nodes)                         # (n_int, 13, k)
-            steps = np.array(nlp.meshes[m].intervals)
-            s = steps[:, :1] + tau[None, :] * (steps[:, 1:] - steps[:, :1])        # (n_int, k)
-            out[m] = (s.ravel(), values.transpose(1, 0, 2).reshape(13, -1))
+            steps = np.array(self.nlp.meshes[m].intervals)
+            s = (steps[:, :1] + tau[None, :] * (steps[:, 1:] - steps[:, :1])).ravel()
+            out[m] = (s, self.states_at(w, m, s))
         return out
 
     def _extra_loads(self, w, params, module_data):

@@ -259,7 +259,7 @@ def test_moving_an_obstacle_by_parameter_equals_rebuilding_with_it():
     assert_allclose(moved.tip_position, rebuilt.tip_position, rtol=0, atol=1e-9)
     assert_allclose(moved.contacts[0].normal_force, rebuilt.contacts[0].normal_force, rtol=1e-6, atol=0)
     sim.set_parameter("obstacles.ball.radius", -1e-3)
-    assert any("size must be positive" in problem for problem in sim.robot.problems(sim.params))
+    assert any("radius must be positive" in problem for problem in sim.robot.problems(sim.params))
 
 
 def test_grip_force_script_quick(tmp_path):
