@@ -226,13 +226,17 @@ def _validate(args):
           f"{len(scenario.loads)} load(s), {len(scenario.objects)} object(s); tip: "
           f"{robot.modules[robot.tip_index].name}")
     import numpy as np
-    names = robot.layout.names()
+    history = [name for name in robot.layout.names() if robot.layout.entries[name].source[0] == "history"]
+    names = [name for name in robot.layout.names() if name not in history]
     print(f"parameters ({len(names)}: --set or sweep them without rebuilding the model):")
     from .units import UNIT_OF
     for name in names:
         value = np.atleast_1d(robot.values[robot.layout[name]])
         text = f"{value[0]:.6g}" if value.size == 1 else "[" + ", ".join(f"{v:.6g}" for v in value) + "]"
         print(f"  {name:<44} {text} {UNIT_OF[robot.layout.kind(name)]}")
+    if history:
+        print(f"contact history ({len(history)} parameters objects.NAME.grip|support.*: each solve copies "
+              "them from the solution it starts from)")
     _print_thermal(scenario, robot)
     return 0
 

@@ -58,7 +58,7 @@ class PhysicsWarning(UserWarning):
 
 #: the kinds of :class:`PhysicsWarning`
 WARNING_KINDS = ("not_converged", "compression", "fit_range", "slack", "global_balance", "accuracy",
-                 "mesh_limit", "tolerance_floor", "grasp", "sequence", "stress", "penetration")
+                 "mesh_limit", "tolerance_floor", "grasp", "sequence", "stress", "penetration", "slipping")
 
 
 class OutputError(ScenarioError):

@@ -13,6 +13,7 @@ import numpy as np
 
 from .errors import ScenarioError
 from .model import Robot
+from .model.bodies import carried_history
 from .scenario import load_scenario
 from .scenario.loader import validate
 from .scenario.overrides import apply_overrides
@@ -119,6 +120,7 @@ class Simulation:
         solver = self.solver(method)
         continuation = continuation or self.scenario.solver.continuation
         initial = self.last if warm_start == "last" else warm_start
+        self.params = carried_history(self.robot, self.params, initial)   # contact objects' grips
         if initial is None and continuation == "never":      # continuation checks it itself
             self.robot.check_clear(self.robot.rest_parameters(self.params))
         if continuation == "always" or (continuation == "auto" and initial is None):
@@ -153,6 +155,7 @@ class Simulation:
         refinement, no warnings issued (they are in ``solution.warnings``)."""
         solver = self.solver()
         solution = None
+        self.params = carried_history(self.robot, self.params, previous)
         if previous is not None:
             solution = (solver.solve_newton(self.params, solver.initial_guess(self.params, previous),
                                             lu=solver.square.last_lu)

@@ -103,11 +103,100 @@ class ContactResult:
     def friction_margin(self):
         return float(self.friction * self.normal_force - np.linalg.norm(self.tangential_force))
 
+    @property
+    def needed_friction(self):
+        """``|f_t| / f_n``: the friction this contact needs to stick."""
+        return float(np.linalg.norm(self.tangential_force) / self.normal_force) if self.normal_force > 0 else 0.0
+
+    @property
+    def slipping(self):
+        return self.friction_margin < 0
+
     def as_dict(self):
         return {"module": self.module, "s": self.s, "obstacle": self.obstacle,
                 "position": np.asarray(self.position).tolist(), "normal": np.asarray(self.normal).tolist(),
                 "normal_force": self.normal_force, "tangential_force": np.asarray(self.tangential_force).tolist(),
-                "gap": self.gap, "friction": self.friction, "friction_margin": self.friction_margin}
+                "gap": self.gap, "friction": self.friction, "friction_margin": self.friction_margin,
+                "needed_friction": self.needed_friction, "slipping": self.slipping}
+
+
+#: a contact object's table columns (:meth:`Solution.contact_columns`), in order
+BODY_COLUMNS = ("grip_force [N]", "friction_margin [N]", "support_force [N]", "z [m]")
+
+
+@dataclass
+class BodyResult:
+    """A free rigid body at equilibrium (a contact object, issue 17): its pose, what the rods'
+    contacts put on it (``contact_force`` [N], ``contact_moment`` about its centre [N m]), its
+    support's reaction (at its lowest point: ``support_force``, ``support_moment``), its
+    ``weight`` and the residual of its equilibrium (all global frame, SI). ``grip_force`` [N]:
+    the sum of its closed grips' normal forces; ``friction_margin`` [N]: the smallest of theirs;
+    ``slipping``: some grip needs more friction than the body has."""
+    name: str
+    position: np.ndarray
+    rotation: np.ndarray
+    grips: list                       # ContactResult of its closed grips
+    contact_force: np.ndarray
+    contact_moment: np.ndarray
+    weight: np.ndarray
+    support_force: np.ndarray
+    support_moment: np.ndarray
+    support_gap: float
+    support_friction: float
+    residual_force: np.ndarray
+    residual_moment: np.ndarray
+
+    @classmethod
+    def of(cls, body, r, R, weight, forces, grips, support):
+        """From the pose ``(r, R)``, ``weight`` (3,), the rods' ``forces`` ``[(point, force on the
+        rod)]``, the closed ``grips`` and ``support`` ``(point, force, moment, gap, friction)`` or None."""
+        r, R, weight = np.asarray(r, float).ravel(), np.asarray(R, float), np.asarray(weight, float).ravel()
+        force, moment = np.zeros(3), np.zeros(3)
+        for point, on_rod in forces:
+            on_rod = np.asarray(on_rod, float).ravel()
+            force -= on_rod
+            moment -= np.cross(np.asarray(point, float).ravel() - r, on_rod)
+        zero = np.zeros(3)
+        point, reaction, couple, gap, friction = support if support is not None else (r, zero, zero, np.inf, 0.0)
+        reaction, couple = np.asarray(reaction, float), np.asarray(couple, float)
+        residual_force = force + reaction + weight
+        residual_moment = moment + np.cross(point - r, reaction) + couple
+        return cls(body.name, r, R, grips, force, moment, weight, reaction, couple, float(gap), float(friction),
+                   residual_force, residual_moment)
+
+    @property
+    def grip_force(self):
+        return float(sum(c.normal_force for c in self.grips))
+
+    @property
+    def friction_margin(self):
+        """The smallest friction margin of its grips [N] (NaN when nothing grips it)."""
+        return float(min(c.friction_margin for c in self.grips)) if self.grips else float("nan")
+
+    @property
+    def needed_friction(self):
+        return float(max(c.needed_friction for c in self.grips)) if self.grips else 0.0
+
+    @property
+    def slipping(self):
+        return any(c.slipping for c in self.grips)
+
+    @property
+    def resting(self):
+        """True while its support pushes on it."""
+        return bool(np.linalg.norm(self.support_force) > 1e-6 * max(np.linalg.norm(self.weight), 1e-300))
+
+    def as_dict(self):
+        from .model.rotations import matrix_to_quaternion
+        return {"name": self.name, "position": self.position.tolist(),
+                "quaternion": np.asarray(matrix_to_quaternion(self.rotation), float).ravel().tolist(),
+                "rotation": self.rotation.tolist(), "grip_force": self.grip_force,
+                "friction_margin": self.friction_margin, "needed_friction": self.needed_friction,
+                "slipping": self.slipping, "resting": self.resting,
+                "contact_force": self.contact_force.tolist(), "contact_moment": self.contact_moment.tolist(),
+                "weight": self.weight.tolist(), "support_force": self.support_force.tolist(),
+                "support_moment": self.support_moment.tolist(), "support_gap": self.support_gap,
+                "residual_force": self.residual_force.tolist(), "residual_moment": self.residual_moment.tolist()}
 
 
 @dataclass
@@ -136,6 +225,7 @@ class Solution:
     obstacles: list = field(default_factory=list)  # the fixed shapes (model.obstacles), for drawings
     #: per contact candidate, True on the closed side of its complementarity's corner
     contact_pattern: tuple = ()
+    bodies: list = field(default_factory=list)     # BodyResult of every free body (contact objects)
 
     # ------------------------------------------------------------------ status
     @property
@@ -196,6 +286,10 @@ class Solution:
         for name, nearest in self.clearance.items():
             out[f"{name}.normal_force [N]"] = sum(c.normal_force for c in self.contacts if c.obstacle == name)
             out[f"{name}.clearance [m]"] = nearest["gap"]
+        for body in self.bodies:            # contact objects: what holds them
+            values = (body.grip_force, body.friction_margin, float(np.linalg.norm(body.support_force)),
+                      float(body.position[2]))
+            out.update({f"{body.name}.{key}": value for key, value in zip(BODY_COLUMNS, values)})
         return out
 
     @property
@@ -236,6 +330,7 @@ class Solution:
             "contacts": [c.as_dict() for c in self.contacts],
             "clearance": self.clearance,
             "penetration": self.penetration,
+            "objects": [b.as_dict() for b in self.bodies],
             "warnings": self.warning_texts(),
             "warning_kinds": [w.kind for w in self.warnings],
         }

@@ -29,6 +29,8 @@ import numpy as np
 
 from ..model import boundary
 from ..model.compatibility import compatibility_residuals
+from ..model.bodies import (body_equilibrium, body_pose, body_scales, body_shape, grip_friction, support_equations,
+                             support_geometry)
 from ..model.contact import contact_geometry, normal_contact, outline_size
 from ..model.loads import distributed_fields, is_active
 from ..model.rod import STATE_SIZE, rod_equations
@@ -104,10 +106,14 @@ class CollocationNLP:
         scales.append(np.array([self.robot.modules[a.module].force_scale for a in unknowns]))
         self.tension_index = offset + np.arange(len(unknowns))
         offset += len(unknowns)
+        self._tensions = blocks[-1] * ca.DM(scales[-1]) if len(unknowns) else ca.MX(0, 1)
         contacts = self.robot.contacts
         blocks.append(ca.MX.sym("f_contact", len(contacts)))
         scales.append(np.array([self.robot.modules[c.module].force_scale for c in contacts]))
         self.contact_index = offset + np.arange(len(contacts))
+        offset += len(contacts)
+        self._contact_forces = blocks[-1] * ca.DM(scales[-1]) if len(contacts) else ca.MX(0, 1)
+        offset = self._declare_bodies(blocks, scales, offset)
         self.w = ca.vertcat(*blocks)
         self.scale = np.concatenate(scales)
         # deviation states [p, h, u - u*, v - v*] in SI units, per interval (13, d+1)
@@ -115,8 +121,44 @@ class CollocationNLP:
         for m, block in enumerate(blocks[:len(self.meshes)]):
             matrix = ca.reshape(block, STATE_SIZE, -1)
             self._states.append(ca.diag(ca.DM(self.node_scale[m])) @ matrix)
-        self._tensions = blocks[-2] * ca.DM(scales[-2]) if len(unknowns) else ca.MX(0, 1)
-        self._contact_forces = blocks[-1] * ca.DM(scales[-1]) if len(contacts) else ca.MX(0, 1)
+
+    def _declare_bodies(self, blocks, scales, offset):
+        """The free bodies' unknowns (:mod:`tca_casadi.model.bodies`): per grip its normal force
+        and tangential force (3) [/F_s of its module]; per body its pose ``[delta (3) /L_o, g (3)]``
+        and, resting on a support, the support's force (3) [/f_o] and moment (3) [/(f_o L_o)].
+        Returns the next offset; ``body_index`` holds every index of these unknowns."""
+        robot, start = self.robot, offset
+        self._grip_forces, self._grip_tangents, self._poses, self._supports = [], [], [], []
+        self.grip_index, self.pose_index, self.support_index = [], [], {}
+        for c in robot.grips:
+            fs = robot.modules[c.module].force_scale
+            block = ca.MX.sym(f"grip_{c.index}", 4)
+            blocks.append(block)
+            scales.append(np.full(4, fs))
+            self.grip_index.append(offset + np.arange(4))
+            offset += 4
+            self._grip_forces.append(block[0] * fs)
+            self._grip_tangents.append(block[1:4] * fs)
+        self._body_shapes = []
+        for body in robot.bodies:
+            fo, lo = body_scales(body)
+            block = ca.MX.sym(f"pose_{body.name}", 6)
+            blocks.append(block)
+            scales.append(np.r_[np.full(3, lo), np.ones(3)])
+            self.pose_index.append(offset + np.arange(6))
+            offset += 6
+            pose = ca.vertcat(block[0:3] * lo, block[3:6])
+            self._poses.append(pose)
+            self._body_shapes.append(body_shape(body, *body_pose(body, pose)))
+            if body.support is not None:
+                block = ca.MX.sym(f"support_{body.name}", 6)
+                blocks.append(block)
+                scales.append(np.r_[np.full(3, fo), np.full(3, fo * lo)])
+                self.support_index[body.index] = offset + np.arange(6)
+                offset += 6
+                self._supports.append((body.index, block[0:3] * fo, block[3:6] * fo * lo))
+        self.body_index = np.arange(start, offset)
+        return offset
 
     @property
     def parameter_size(self):
@@ -130,8 +172,13 @@ class CollocationNLP:
         return self.P[self.robot.layout[actuator.parameter]][0]
 
     def contact_of(self, contact):
-        """Symbolic normal force [N] of a contact (:class:`~tca_casadi.model.contact.ContactModel`)."""
-        return self._contact_forces[contact.index]
+        """``(shape, normal force [N], tangential force (3,) [N] or None)`` of a contact
+        (:class:`~tca_casadi.model.contact.ContactModel`): the obstacle placed at the
+        parameters, or (a grip) the body at its unknown pose, symbolic."""
+        if contact.body is not None:
+            return (self._body_shapes[contact.body], self._grip_forces[contact.index],
+                    self._grip_tangents[contact.index])
+        return self.robot.obstacle_of(contact.obstacle, self.param), self._contact_forces[contact.index], None
 
     def param(self, name):
         return self.P[self.robot.layout[name]]
@@ -320,7 +367,42 @@ class CollocationNLP:
             module = self.robot.modules[c.module]
             node = self._node_at[c.module][_breakpoint(self._node_at[c.module], c.s)]
             g, _, _ = contact_geometry(self.robot.obstacle_of(c.obstacle, self.param), module, node)
-            self._g.append(normal_contact(self.contact_of(c), g, module.force_scale, outline_size(module)))
+            self._g.append(normal_contact(self._contact_forces[c.index], g, module.force_scale, outline_size(module)))
+        self._body_conditions()
+
+    def _body_conditions(self):
+        """Per grip its normal complementarity and its three friction equations; per body its
+        six equilibrium equations and, on a support, the support's six
+        (:mod:`tca_casadi.model.bodies`)."""
+        robot = self.robot
+        on_body = [[] for _ in robot.bodies]
+        for c in robot.grips:
+            module, body = robot.modules[c.module], robot.bodies[c.body]
+            node = self._node_at[c.module][_breakpoint(self._node_at[c.module], c.s)]
+            g, n, point = contact_geometry(self._body_shapes[c.body], module, node)
+            fs, gs = module.force_scale, outline_size(module)
+            f, t = self._grip_forces[c.index], self._grip_tangents[c.index]
+            r, R = body_pose(body, self._poses[c.body])
+            self._g.append(normal_contact(f, g, fs, gs))
+            self._g.append(grip_friction(point, n, r, R, self.param(robot.grip_parameter(c, "anchor")),
+                                         self.param(robot.grip_parameter(c, "sticks")), f, t, g, fs, gs))
+            on_body[c.body].append((point, f * n + t))
+        supports = {b: (force, moment) for b, force, moment in self._supports}
+        for body in robot.bodies:
+            fo, lo = body_scales(body)
+            r, R = body_pose(body, self._poses[body.index])
+            weight = self.param(f"{body.name}.mass") * self.param("gravity")
+            support = None
+            if body.index in supports:
+                force, moment = supports[body.index]
+                plane = robot.obstacle_of(body.support, self.param)
+                _, _, point = support_geometry(plane, body, r, R)
+                support = (point, force, moment)
+                prefix = f"objects.{body.name}.support."
+                self._g.append(support_equations(plane, body, r, R, self.param(prefix + "anchor"),
+                                                 self.param(prefix + "sticks"), force, moment, fo))
+            force, moment = body_equilibrium(r, weight, on_body[body.index], support)
+            self._g.append(ca.vertcat(force / fo, moment / (fo * lo)))
 
     # ------------------------------------------------------------------ helpers for solvers
     def node_s(self, m):

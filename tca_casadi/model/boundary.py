@@ -90,8 +90,9 @@ def point_wrenches(robot, m, s, before, after, tension, param, contact=None):
     anchor), ``-F t-`` where it ends, and the corner force ``F (t+ - t-)`` where it runs through
     a point at which the strains jump (a point load, another actuator's anchor). This is the
     delta part of the distributed load ``F q = F R^T t'`` (SPEC section 3) at a jump of ``t``.
-    Point loads and masses are added, and the contacts at s (``contact(c)``: the normal force
-    [N] of :class:`~tca_casadi.model.contact.ContactModel` c; :func:`.contact.contact_wrench`).
+    Point loads and masses are added, and the contacts at s (``contact(c)``: ``(shape, normal
+    force [N], tangential force (3,) [N] or None)`` of :class:`~tca_casadi.model.contact.ContactModel`
+    c, the shape placed; :func:`.contact.contact_wrench`).
     ``before``/``after`` (deviation states either side of s) may be None at the module's ends.
     """
     module, total = robot.modules[m], None
@@ -106,7 +107,7 @@ def point_wrenches(robot, m, s, before, after, tension, param, contact=None):
         total = add(total, point_load_wrench(load, h, param))
     state = after if after is not None else before
     for c in robot.contacts_at(m, s):
-        total = add(total, contact_wrench(robot.obstacle_of(c.obstacle, param), module, state, contact(c)))
+        total = add(total, contact_wrench(module, state, *contact(c)))
     return total
 
 

@@ -40,11 +40,16 @@ MERGE = 1e-9
 @dataclass(frozen=True)
 class ContactModel:
     """One contact candidate: module index ``module``, arc length ``s`` [m], obstacle index
-    ``obstacle`` into ``robot.obstacles``; ``index`` its position in ``robot.contacts``."""
+    ``obstacle`` into ``robot.obstacles``; ``index`` its position in ``robot.contacts``. A grip
+    (against a free body, :mod:`.bodies`) has ``body`` (index into ``robot.bodies``) instead of
+    ``obstacle``, ``index`` into ``robot.grips`` and ``number``, its place among its module's
+    candidates (its history parameters' names)."""
     module: int
     s: float
-    obstacle: int
+    obstacle: object
     index: int
+    body: object = None
+    number: int = 0
 
 
 def shape_of(config):
@@ -104,14 +109,15 @@ def contact_geometry(shape, module, state):
     return g, n, contact_point(shape, outline, p, R)
 
 
-def contact_wrench(shape, module, state, force):
+def contact_wrench(module, state, shape, force, tangential=None):
     """Body-frame wrench ``[moment; force]`` of a normal force ``force`` [N] along the
-    obstacle's normal at the outline's nearest point, about the centerline point of ``state``
-    (the same jump a point load makes, :func:`tca_casadi.model.boundary.point_wrenches`)."""
+    obstacle's normal (plus a ``tangential`` force (3,) [N], friction) at the outline's nearest
+    point, about the centerline point of ``state`` (the same jump a point load makes,
+    :func:`tca_casadi.model.boundary.point_wrenches`)."""
     import casadi as ca
     p, _ = contact_frame(state)
     _, n, point = contact_geometry(shape, module, state)
-    global_force = force * n
+    global_force = force * n if tangential is None else force * n + tangential
     zero = ca.DM.zeros(3)
     return POINT_WRENCH(state[3:7], global_force, cross(point - p, global_force), zero, zero)
 

@@ -28,6 +28,8 @@ name                                                   what                     
 ``MODULE.MUSCLE.temperature|pressure|input``           its law's input           its rest value
 ``MODULE.TENDON.tension`` / ``.displacement``          [N] / [m]                 zero
 ``OBJECT.mass``, ``OBJECT.held``                       [kg], 0 or 1              zero
+``objects.OBJECT.grip|support...anchor|sticks``        a contact object's        kept
+                                                       history (:mod:`.bodies`)
 ``LOAD.mass`` or ``LOAD.force``, ``LOAD.moment``       [kg] or [N], [N m]        zero
 =====================================================  ========================  =============
 
@@ -96,7 +98,7 @@ class ParameterLayout:
         for path in [entry.source for entry in self.entries.values()] + list(IGNORED):
             _drop(data, path)
         for item in data.get("objects", []):
-            for key in OBJECT_DRAWING:
+            for key in OBJECT_DRAWING if not item.get("contact") else ():   # a free body's are built in
                 item.pop(key, None)
         for tca_type in data.get("tca_types", {}).values():
             for key in TCA_THERMAL:
@@ -156,7 +158,13 @@ def declare(scenario, actuators, point_loads, distributed):
         put(actuator.parameter, getattr(config, actuator.control), kind, source + (actuator.control,), rest)
     for k, item in enumerate(scenario.objects):
         put(f"{item.name}.mass", item.mass, "mass", ("objects", k, "mass"), 0.0)
-        put(f"{item.name}.held", float(item.held), "dimensionless", ("objects", k, "held"), 0.0)
+        if not item.contact:
+            put(f"{item.name}.held", float(item.held), "dimensionless", ("objects", k, "held"), 0.0)
+    from .bodies import history_names
+    for name, size in history_names(scenario):      # set from the solution a solve starts from
+        sticks = name.endswith(".support.sticks")   # placed resting on its support; no grip yet
+        put(name, np.full(size, float(sticks)) if name.endswith("sticks") else np.zeros(size), "dimensionless",
+            ("history",) + tuple(name.split(".")))
     for k, obstacle in enumerate(scenario.obstacles):      # moved without a rebuild (a grasp, a study)
         put(f"obstacles.{obstacle.name}.position", obstacle.position, "length", ("obstacles", k, "position"))
         for key in OBSTACLE_SIZES.get(obstacle.shape, ()):

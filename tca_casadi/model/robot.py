@@ -234,6 +234,9 @@ class Robot:
         self.contact_tolerance = contact_tolerance
         #: ``{module index: (s, ...)}``: candidates localisation added (part of the structure)
         self.added_contacts = {}
+        #: free rigid bodies (:class:`.bodies.BodyModel`) and the grip candidates against them
+        #: (:class:`.contact.ContactModel` with ``body`` set; ``index`` into this list)
+        self.bodies, self.grips = [], []
 
     def obstacle_of(self, k, param):
         """Obstacle k at the parameters: its position ``obstacles.NAME.position`` and its size
@@ -248,11 +251,15 @@ class Robot:
     def contacts_at(self, m, s):
         """The contacts at arc length s of module m."""
         tol = 1e-12 * self.modules[m].length
-        return [c for c in self.contacts if c.module == m and abs(c.s - s) <= tol]
+        return [c for c in self.contacts + self.grips if c.module == m and abs(c.s - s) <= tol]
 
     def contact_points(self, m):
-        """Sorted candidate arc lengths [m] of module m."""
-        return sorted({c.s for c in self.contacts if c.module == m})
+        """Sorted candidate arc lengths [m] of module m (against obstacles and bodies)."""
+        return sorted({c.s for c in self.contacts + self.grips if c.module == m})
+
+    def grip_parameter(self, c, key):
+        """The name of a grip's history parameter ``key`` (``anchor`` or ``sticks``)."""
+        return f"objects.{self.bodies[c.body].name}.grip.{self.modules[c.module].name}.{c.number}.{key}"
 
     @property
     def unknowns(self):
@@ -317,6 +324,7 @@ class Robot:
         obstacles, contacts = _contacts(scenario, modules, added or {})
         robot = cls(modules, actuators, point_loads, distributed, layout, values, scenario.name, obstacles, contacts,
                     scenario.contact.tolerance)
+        robot.bodies, robot.grips = _bodies(scenario, obstacles)
         robot.added_contacts = {m: tuple(sorted(points)) for m, points in (added or {}).items() if points}
         return robot
 
@@ -334,7 +342,7 @@ class Robot:
         unloaded robot, where a cold solve starts) by more than 1e-9 m: naming the obstacle,
         the module, how deep and where. A grasp that the closed robot would cut starts from an
         open configuration instead (a sequence step, a warm start)."""
-        if self.obstacles:
+        if self.obstacles or self.bodies:
             _check_clear(self.at(params), np.asarray(params, float))
 
     def parameter_vector(self, scenario):
@@ -369,9 +377,13 @@ class Robot:
                 cache.pop(next(iter(cache)))
             cache[key] = self._evaluated(params)
         evaluated = cache[key]
-        return Robot(evaluated.modules, evaluated.actuators, self.point_loads, self.distributed_loads, self.layout,
-                     params, self.name, evaluated.obstacles, self.contacts,
-                     self.contact_tolerance)
+        return self._sharing_bodies(Robot(evaluated.modules, evaluated.actuators, self.point_loads,
+                                          self.distributed_loads, self.layout, params, self.name,
+                                          evaluated.obstacles, self.contacts, self.contact_tolerance))
+
+    def _sharing_bodies(self, robot):
+        robot.bodies, robot.grips = self.bodies, self.grips
+        return robot
 
     def _without_drive_values(self, params):
         """``params`` (bytes) with each actuator's own value (TCA temperature, tendon tension or
@@ -395,9 +407,9 @@ class Robot:
             modules[actuator.module].actuators.append(moved)
             actuators.append(moved)
         obstacles = [self.obstacle_of(k, param) for k in range(len(self.obstacles))]
-        return Robot(modules, actuators, self.point_loads, self.distributed_loads, self.layout,
-                     np.asarray(params, float), self.name, obstacles, self.contacts,
-                     self.contact_tolerance)
+        return self._sharing_bodies(Robot(modules, actuators, self.point_loads, self.distributed_loads, self.layout,
+                                          np.asarray(params, float), self.name, obstacles, self.contacts,
+                                          self.contact_tolerance))
 
     def problems(self, params):
         """What is physically impossible at ``params`` (a list of messages, empty if none):
@@ -525,7 +537,7 @@ def _loads(scenario):
             frame = load.frame if load.kind == "point" else "global"
             point.append(PointLoadModel(load.name, index, float(s), frame, load.kind))
     for item in scenario.objects:
-        for holder in item.held_by:
+        for holder in item.held_by if not item.contact else ():      # a contact object: by contact
             index = module_index[holder]
             point.append(PointLoadModel(item.name, index, scenario.modules[index].length, "global",
                                         "object", 1.0 / len(item.held_by)))
@@ -549,6 +561,23 @@ def _contacts(scenario, modules, added):
     return obstacles, contacts
 
 
+def _bodies(scenario, obstacles):
+    """``(bodies, grips)`` of the scenario's contact objects (:mod:`.bodies`)."""
+    from .bodies import BodyModel, contact_objects, grip_points
+    from .contact import ContactModel
+    names = [o.name for o in obstacles]
+    bodies = []
+    for b, (_, item) in enumerate(contact_objects(scenario)):
+        yaw = item.yaw
+        rotation = np.array([[np.cos(yaw), -np.sin(yaw), 0], [np.sin(yaw), np.cos(yaw), 0], [0, 0, 1.0]])
+        holders = tuple(m for m, module in enumerate(scenario.modules) if module.name in item.held_by)
+        bodies.append(BodyModel(item.name, b, float(item.mass), np.asarray(item.size, float), np.asarray(item.position, float),
+                                rotation, float(item.friction),
+                                names.index(item.support) if item.support is not None else None, holders))
+    grips = [ContactModel(m, s, None, k, body=b, number=K) for k, (b, m, K, s) in enumerate(grip_points(scenario))]
+    return bodies, grips
+
+
 #: samples per module when checking that no obstacle cuts the reference configuration
 CLEAR_SAMPLES = 401
 
@@ -559,14 +588,25 @@ def _check_clear(robot, values):
     from ..errors import ScenarioError
     from ..solvers.guess import reference_chain
     from .contact import gaps, outline_of
+    from .bodies import body_shape, support_geometry
     samples = [np.linspace(0.0, module.length, CLEAR_SAMPLES) for module in robot.modules]
+    placed = [body_shape(body, body.position, body.rotation) for body in robot.bodies]
+    for body in robot.bodies:
+        if body.support is not None:
+            g, _, _ = support_geometry(robot.obstacles[body.support], body, body.position, body.rotation)
+            if abs(g) > 1e-9:
+                raise ScenarioError(
+                    f"objects[{body.name}]: {'lies' if g > 0 else 'cuts'} {abs(g) * 1e3:.4g} mm "
+                    f"{'above' if g > 0 else 'into'} its support {robot.obstacles[body.support].name!r}: "
+                    "place it on it (its lowest point on the plane)")
     for m, states in enumerate(reference_chain(robot, values, samples)):
         module = robot.modules[m]
-        for shape in robot.obstacles:
+        for shape in robot.obstacles + placed:
             found = gaps(shape, outline_of(module), states[0:3], states[3:7])
             j = int(np.argmin(found))
             if found[j] < -1e-9:
+                kind = "objects" if any(shape is body for body in placed) else "obstacles"
                 raise ScenarioError(
-                    f"obstacles[{shape.name}]: intersects module {module.name!r} in its reference configuration "
+                    f"{kind}[{shape.name}]: intersects module {module.name!r} in its reference configuration "
                     f"by {-found[j] * 1e3:.4g} mm at s = {samples[m][j] * 1e3:.4g} mm, where a cold solve starts: move it "
                     "clear, or start from a configuration clear of it (a sequence step, a warm start)")

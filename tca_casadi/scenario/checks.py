@@ -40,6 +40,7 @@ def check_references(scenario, raw, sources):
                      f"unknown module {holder!r}{closest(holder, module_names)}")
     _unique_names(scenario.obstacles, ("obstacles",), raw, sources)
     _check_contact(scenario, module_names, raw, sources)
+    _check_bodies(scenario, raw, sources)
     _check_timeline(scenario, raw, sources)
 
 
@@ -53,6 +54,22 @@ def _check_contact(scenario, module_names, raw, sources):
             if s > length * (1 + 1e-12):
                 fail(raw, sources, ("contact", "at", name, k),
                      f"s = {s * 1e3:g} mm is beyond the module's length ({length * 1e3:g} mm)")
+
+
+def _check_bodies(scenario, raw, sources):
+    """Contact objects: a ``support`` that names a plane obstacle."""
+    planes = {o.name: o for o in scenario.obstacles}
+    for k, item in enumerate(scenario.objects):
+        if item.support is None:
+            continue
+        if not item.contact:
+            fail(raw, sources, ("objects", k, "support"), "support is for contact objects (contact: true)")
+        if item.support not in planes:
+            fail(raw, sources, ("objects", k, "support"),
+                 f"unknown obstacle {item.support!r}{closest(item.support, list(planes))}")
+        if planes[item.support].shape != "plane":
+            fail(raw, sources, ("objects", k, "support"),
+                 f"obstacle {item.support!r} is a {planes[item.support].shape}: a support must be a plane")
 
 
 def _check_timeline(scenario, raw, sources):

@@ -459,8 +459,10 @@ Load = Annotated[Union[PointLoad, MassLoad, DistributedLoad], Field(discriminato
 class GraspedObject(Strict):
     """A rigid box the robot can pick: it rests at ``position`` (its centre, global frame, turned
     ``yaw`` about the global z axis) until ``held`` is set; while held, its weight hangs from the
-    tips of the ``held_by`` modules in equal shares and it moves with them. Contact forces are not
-    modelled."""
+    tips of the ``held_by`` modules in equal shares and it moves with them. With ``contact: true``
+    it is a free rigid body instead (``docs/contact.md`` section 5): resting on the plane obstacle
+    ``support``, touched by the ``held_by`` modules (``friction`` between them and it), held only
+    by the contact forces."""
     name: str = Field(min_length=1)
     mass: NonNegativeMass
     size: Vector3Length
@@ -468,8 +470,23 @@ class GraspedObject(Strict):
     yaw: Angle = 0.0
     held_by: list[str] = Field(min_length=1)
     held: bool = False
+    #: a free rigid body (issue 17): its pose is unknown, it rests on ``support`` and the
+    #: ``held_by`` modules can touch it, press on it and carry it by friction
+    contact: bool = False
+    support: Optional[str] = None
+    friction: Annotated[float, _quantity("dimensionless"), Field(ge=0)] = 0.0
 
     _positive_size = model_validator(mode="after")(lambda self: _positive_edges(self))
+
+    @model_validator(mode="after")
+    def _contact_body(self):
+        if self.contact and self.held:
+            raise ValueError("held is for objects without contact: a contact object is held by its contact forces")
+        if self.contact and self.mass <= 0:
+            raise ValueError("a contact object needs a mass > 0 (its weight is what the grasp carries)")
+        if self.contact and self.support is None:
+            raise ValueError("a contact object needs a support: the plane obstacle it rests on where it is placed")
+        return self
 
 
 def _positive_edges(box):

@@ -115,15 +115,69 @@ def contact_results(robot, modules, module_data, forces, clearance=None):
             closed.append(ContactResult(module.name, float(c.s), shape.name, point, n, force, np.zeros(3),
                                         float(g), float(shape.friction)))
     loads = {m: (np.array(p).T, np.array(f).T) for m, (p, f) in loads.items()}
-    for shape in robot.obstacles:
-        nearest = (clearance or {}).get(shape.name) or _nearest_node(robot, shape, module_data)
-        found[shape.name] = nearest
+    names = [shape.name for shape in robot.obstacles] + [body.name for body in robot.bodies]
+    for name in names:
+        shape = next((shape for shape in robot.obstacles if shape.name == name), None)
+        nearest = (clearance or {}).get(name) or (_nearest_node(robot, shape, module_data) if shape else None)
+        if nearest is None:
+            continue
+        found[name] = nearest
         if nearest["gap"] < -robot.contact_tolerance:
+            what = "obstacle" if shape is not None else "object"
             warnings.append(PhysicsWarning(
-                "penetration", f"module {nearest['module']} cuts {-nearest['gap'] * 1e6:.3g} um into obstacle "
-                f"{shape.name!r} at s = {nearest['s'] * 1e3:.4g} mm, between contact candidates: add a point "
+                "penetration", f"module {nearest['module']} cuts {-nearest['gap'] * 1e6:.3g} um into {what} "
+                f"{name!r} at s = {nearest['s'] * 1e3:.4g} mm, between contact candidates: add a point "
                 "there to contact.at or raise contact.points"))
     return closed, loads, found, warnings, tuple(pattern)
+
+
+def body_results(robot, params, module_data, values):
+    """``(grips, loads, bodies, warnings, pattern)`` of a solution with free bodies
+    (:mod:`tca_casadi.model.bodies`): the :class:`ContactResult` of every closed grip, their
+    forces on each module ``{m: (points, forces)}`` for the global balance, one
+    :class:`BodyResult` per body, a ``slipping`` warning for each grip that needs more friction
+    than it has, and each grip's and support's side of its complementarity's corner.
+    ``values``: ``{"grips": [(f_n, f_t (3)), ...], "poses": [(6,), ...], "supports": {b: (6,)}}`` [SI]."""
+    from ..model.bodies import body_pose, body_shape, support_geometry
+    from ..solution import BodyResult
+    param = robot.param_function(params)
+    closed, loads, warnings, pattern = [], {}, [], []
+    placed = [body_pose(body, values["poses"][body.index]) for body in robot.bodies]
+    shapes = [body_shape(body, *pose) for body, pose in zip(robot.bodies, placed)]
+    on_body = [[] for _ in robot.bodies]
+    for c in robot.grips:
+        module, body = robot.modules[c.module], robot.bodies[c.body]
+        s, states = module_data[c.module][0], module_data[c.module][1]
+        g, n, point = contact_geometry(shapes[c.body], module, states[:, int(np.argmin(np.abs(s - c.s)))])
+        grip = np.asarray(values["grips"][c.index], float)
+        force, tangential = float(grip[0]), grip[1:4]
+        pattern.append(force / module.force_scale > float(g) / outline_size(module))
+        on_rod = force * n + tangential
+        points, pushes = loads.setdefault(c.module, ([], []))
+        points.append(point)
+        pushes.append(on_rod)
+        on_body[c.body].append((point, on_rod))
+        if force > CLOSED * module.force_scale:
+            result = ContactResult(module.name, float(c.s), body.name, point, n, force, tangential, float(g),
+                                   body.friction)
+            closed.append(result)
+            if result.friction_margin < 0:
+                warnings.append(PhysicsWarning(
+                    "slipping", f"object {body.name!r} slips at module {module.name} (s = {c.s * 1e3:.4g} mm): the "
+                    f"grasp needs friction {result.needed_friction:.3g} there and has {body.friction:.3g}"))
+    bodies = []
+    for body, (r, R), forces in zip(robot.bodies, placed, on_body):
+        support = values["supports"].get(body.index)
+        plane = robot.obstacle_of(body.support, param) if body.support is not None else None
+        if plane is not None:
+            g, normal, point = support_geometry(plane, body, r, R)
+            pattern.append(float(np.dot(normal, support[0:3])) / (body.mass * 9.81) > float(g) / body.length_scale)
+        weight = float(param(f"{body.name}.mass")[0]) * param("gravity")
+        bodies.append(BodyResult.of(body, r, R, weight, forces, [c for c in closed if c.obstacle == body.name],
+                                    None if plane is None else (np.asarray(point, float).ravel(), support[0:3],
+                                                                support[3:6], float(g), plane.friction)))
+    loads = {m: (np.array(p).T, np.array(f).T) for m, (p, f) in loads.items()}
+    return closed, loads, bodies, warnings, tuple(pattern)
 
 
 def _nearest_node(robot, shape, module_data):
@@ -138,7 +192,7 @@ def _nearest_node(robot, shape, module_data):
 
 
 def build_solution(robot, params, module_data, tensions, lengths, result, method, raw, notices=(), extra_loads=None,
-                   contact_forces=None, clearance=None):
+                   contact_forces=None, clearance=None, bodies=None):
     """Solution from ``module_data = [(s, states, base_wrench_body, weights), ...]``, tensions per
     actuator (list in ``robot.actuators`` order) and lengths; ``result`` the
     :class:`SolveStatus`, ``method`` the solver's name, ``raw`` its variables (``w`` or ``z``),
@@ -146,7 +200,8 @@ def build_solution(robot, params, module_data, tensions, lengths, result, method
     ``extra_loads``: ``(points, forces, moments)`` (3, k) global, beyond the robot's own loads,
     for the global balance (a dynamic step's inertial loads); ``contact_forces`` (n,) [N] the
     normal force of each of ``robot.contacts`` and ``clearance`` the solver's nearest approach
-    to each obstacle (:func:`contact_results`)."""
+    to each obstacle (:func:`contact_results`); ``bodies`` the free bodies' unknowns
+    (:func:`body_results`)."""
     robot = robot.at(params)          # stiffness, routes, laws at these parameters
     modules = [module_result(robot.modules[m], *data) for m, data in enumerate(module_data)]
     actuators = {}
@@ -160,6 +215,12 @@ def build_solution(robot, params, module_data, tensions, lengths, result, method
         contacts, contact_loads, nearest, found, pattern = contact_results(robot, modules, module_data,
                                                                            contact_forces, clearance)
         warnings.extend(found)
+    body_list = []
+    if robot.bodies:
+        grips, grip_loads, body_list, slipping, grip_pattern = body_results(robot, params, module_data, bodies)
+        contacts, pattern = contacts + grips, pattern + grip_pattern
+        contact_loads = _merged(contact_loads or {}, grip_loads)
+        warnings.extend(slipping)
     balance = global_balance(robot, modules, params, tensions, extra_loads, contact_loads)
     if result.success and balance.relative > BALANCE_TOLERANCE:
         warnings.append(PhysicsWarning("global_balance", f"global balance off by {balance.relative:.1e} of the forces in play "
@@ -174,7 +235,18 @@ def build_solution(robot, params, module_data, tensions, lengths, result, method
                     parameters=np.array(params, float), parameter_names=dict(robot.layout.slices),
                     scenario_name=robot.name, tip_module=robot.tip_index, balance=balance,
                     loads=load_markers(robot, modules, params), contacts=contacts, clearance=nearest, contact_pattern=pattern,
-                    obstacles=robot.obstacles)
+                    obstacles=robot.obstacles, bodies=body_list)
+
+
+def _merged(loads, more):
+    """``{m: (points, forces)}`` of both (3, k) sets of point loads."""
+    out = dict(loads)
+    for m, (points, forces) in more.items():
+        if m in out:
+            out[m] = (np.hstack([out[m][0], points]), np.hstack([out[m][1], forces]))
+        else:
+            out[m] = (points, forces)
+    return out
 
 
 def not_converged(result):

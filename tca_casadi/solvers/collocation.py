@@ -220,8 +220,12 @@ class CollocationSolver:
                 tensions.append(params[self.robot.layout[actuator.parameter]][0])
         robot_params = params[:self.robot.layout.size]
         contact = {}
-        if self.robot.obstacles:
+        if self.robot.obstacles:       # (a contact object's support is one)
             contact = {"contact_forces": w_phys[nlp.contact_index], "clearance": self.clearance(w, params)}
+        if self.robot.bodies:
+            contact["bodies"] = {"grips": [w_phys[i] for i in nlp.grip_index],
+                                 "poses": [w_phys[i] for i in nlp.pose_index],
+                                 "supports": {b: w_phys[i] for b, i in nlp.support_index.items()}}
         return build_solution(self.robot, robot_params, module_data, tensions, lengths.ravel(), status,
                               self.method, {"w": w}, extra_loads=self._extra_loads(w, params, module_data), **contact)
 
@@ -233,7 +237,7 @@ class CollocationSolver:
         round, three rounds: to 3e-5 of a spacing), so that a dip between samples (beside a
         closed candidate) is found wherever it is."""
         out, fine = {}, self.fine_states(w)
-        for shape in self.robot.at(params[:self.robot.layout.size]).obstacles:
+        for shape in self.robot.at(params[:self.robot.layout.size]).obstacles + self.placed_bodies(w):
             best = {"gap": np.inf}
             for m, (s, states) in fine.items():
                 module = self.robot.modules[m]
@@ -255,6 +259,13 @@ class CollocationSolver:
                         best = {"gap": value, "module": module.name, "s": centre}
             out[shape.name] = best
         return out
+
+    def placed_bodies(self, w):
+        """The free bodies as boxes at their solved poses (:mod:`tca_casadi.model.bodies`)."""
+        from ..model.bodies import body_pose, body_shape
+        physical = np.asarray(w, float) * self.nlp.scale
+        return [body_shape(body, *body_pose(body, physical[self.nlp.pose_index[body.index]]))
+                for body in self.robot.bodies]
 
     def _poses_at(self, w, m, s):
         """``(p (3, n), h (4, n))`` of module m at arc lengths ``s`` (n,) (:meth:`states_at`)."""

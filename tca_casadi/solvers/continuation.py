@@ -50,9 +50,14 @@ class BranchFollower:
     """Follow the branch of ``solver`` (a CollocationSolver) along ``P0 + lam delta``."""
 
     def __init__(self, solver, P0, delta, jump_tolerance=0.15):
-        self.solver, self.P0, self.delta = solver, np.asarray(P0, float), np.asarray(delta, float)
+        self.solver, self.P0, self.delta = solver, np.array(P0, float), np.array(delta, float)
         self.jump_tolerance = float(jump_tolerance)
         self.iterations = 0
+        # contact objects' history (grip anchors): the target's from the start, then updated
+        # after every accepted step (a grip that closes on the way sticks from the next step)
+        self._history = history_indices(solver.robot)
+        self.P0[self._history] += self.delta[self._history]
+        self.delta[self._history] = 0.0
 
     def params_at(self, lam):
         return self.P0 + lam * self.delta
@@ -73,6 +78,10 @@ class BranchFollower:
     #: IPOPT is tried after a failed Newton step only on steps up to this size (lam); a larger
     #: failed step is halved first, which is much cheaper
     IPOPT_STEP = 1.0 / 16
+    #: with contact objects (friction is path-dependent: a grip sticks from where it closed),
+    #: a step on which a contact or actuator changes side of its corner is taken only up to
+    #: this size (lam): no step jumps across a grasp closing
+    CORNER_STEP = 1.0 / 32
 
     def step(self, current, lam):
         """Newton from the tangent predictor at ``lam`` (IPOPT, warm-started, if Newton fails
@@ -84,6 +93,25 @@ class BranchFollower:
             trial = self.solver.solve_ipopt(self.params_at(lam), current.solution)
         self.iterations += trial.iterations
         return trial
+
+    def _grasp_jump(self, corner, step, jump):
+        """The trapezoid test with contact objects: a step across a corner is taken only up to
+        :data:`CORNER_STEP` (no step jumps across a grasp closing); on steps up to that size the
+        test is not applied (a grip's contact point crossing an edge of the object turns its
+        normal within a step: a corner the pattern does not see, not another branch)."""
+        if step <= self.CORNER_STEP:
+            return 0.0
+        return np.inf if corner else jump
+
+    def _stick(self, lam, trial, candidate):
+        """The accepted point with the history carried from it (the grips closed there are
+        anchored where they touch): the same state, linearised again if the history changed."""
+        from ..model.bodies import carried_history
+        carried = carried_history(self.solver.robot, self.P0, trial)
+        if np.array_equal(carried, self.P0):
+            return candidate
+        self.P0 = carried
+        return self.point(lam, trial)
 
     @staticmethod
     def inconsistency(a, b):
@@ -122,7 +150,11 @@ class BranchFollower:
                 corner = _slack_pattern(current.solution) != _slack_pattern(trial)
                 jump = 0.0 if corner else self.inconsistency(current, candidate)
                 crossed = not corner and candidate.det_sign * current.det_sign < 0
+                if self._history.size:       # contact objects
+                    jump = self._grasp_jump(corner, lam - current.lam, jump)
                 if jump <= self.jump_tolerance and not crossed:
+                    if self._history.size:
+                        candidate = self._stick(lam, trial, candidate)
                     current, substeps = candidate, substeps + 1
                     step = min(2 * step, max_step)
                     continue
@@ -130,6 +162,14 @@ class BranchFollower:
             if step < min_step:
                 return current, step, substeps, StepFailure(trial, jump, crossed)
         return current, step, substeps, None
+
+
+def history_indices(robot):
+    """Indices into the parameter vector of a robot's contact-object history (grip anchors and
+    support anchors, :mod:`tca_casadi.model.bodies`)."""
+    from ..model.bodies import history_names_of
+    names = history_names_of(robot) if getattr(robot, "bodies", None) else []
+    return np.array([i for name, _ in names for i in range(robot.layout.size)[robot.layout[name]]], int)
 
 
 def _slack_pattern(solution):

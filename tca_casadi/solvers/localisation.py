@@ -88,7 +88,10 @@ def _added_points(robot, meshes, solution, history, slope):
     added = {m: list(points) for m, points in robot.added_contacts.items()}
     names = [module.name for module in robot.modules]
     new = False
+    obstacles = {shape.name for shape in robot.obstacles}
     for name, nearest in solution.clearance.items():
+        if name not in obstacles:          # a free body: its grips are fixed candidates
+            continue
         m, s_d = names.index(nearest["module"]), nearest["s"]
         penetrated, length = nearest["gap"] < -robot.contact_tolerance, robot.modules[m].length
         points = added.setdefault(m, [])

@@ -6,7 +6,8 @@ carried: its centre is the grasp point (the mean of its holders' tips) and it tu
 holders' common parent (the gripper's base frame). Picking is checked: the grasp point must lie
 inside the object's box when the holders close on it. When ``held`` is cleared the object is put
 down on its support plane (the height it rested at) below the grasp point, keeping only its
-rotation about the vertical. Falling and contact forces are not simulated.
+rotation about the vertical. Falling and contact forces are not simulated. A contact object
+(``contact: true``, a free rigid body) is where its solution puts it (``solution.bodies``).
 """
 from dataclasses import dataclass
 
@@ -57,6 +58,8 @@ class ObjectTracker:
         self.poses = {o.name: ObjectPose(o.name, np.array(o.size), np.array(o.position), _yaw_rotation(o.yaw), False)
                       for o in scenario.objects}
         self.support = {o.name: float(o.position[2]) for o in scenario.objects}
+        #: contact objects (free rigid bodies): their pose is the solution's, not tracked here
+        self.free = {o.name for o in scenario.objects if o.contact}
         self._relative = {}            # name -> object rotation in the carrier's tip frame
 
     @property
@@ -84,8 +87,18 @@ class ObjectTracker:
         return solution.modules[carrier].tip_rotation
 
     def held_in(self, solution, name):
-        """Whether ``solution``'s parameters hold the object (``NAME.held`` >= 1/2)."""
+        """Whether ``solution``'s parameters hold the object (``NAME.held`` >= 1/2); a contact
+        object: whether something grips it."""
+        if name in self.free:
+            return any(b.name == name and b.grip_force > 0 for b in solution.bodies)
         return bool(solution.parameters[solution.parameter_names[f"{name}.held"]][0] >= 0.5)
+
+    def _solved_pose(self, solution, name):
+        """A contact object's pose in ``solution`` (the solved free body)."""
+        body = next((b for b in solution.bodies if b.name == name), None)
+        if body is None:
+            return self.poses[name]
+        return ObjectPose(name, self.poses[name].size, body.position, body.rotation, body.grip_force > 0)
 
     # ------------------------------------------------------------------ stepping
     def poses_in(self, solution):
@@ -93,7 +106,9 @@ class ObjectTracker:
         objects follow the grasp point, the others stay where they are."""
         out = {}
         for name, pose in self.poses.items():
-            if pose.held:
+            if name in self.free:
+                out[name] = self._solved_pose(solution, name)
+            elif pose.held:
                 rotation = self.carrier_rotation(solution, name) @ self._relative[name]
                 out[name] = ObjectPose(name, pose.size, self.grasp_point(solution, name), rotation, True)
             else:
@@ -104,6 +119,9 @@ class ObjectTracker:
         """Update every object after a step's ``solution``: pick (checked), carry, or put down.
         Raises ScenarioError when a step holds an object its holders do not close on."""
         for name, pose in list(self.poses.items()):
+            if name in self.free:
+                self.poses[name] = self._solved_pose(solution, name)
+                continue
             holding = self.held_in(solution, name)
             grasp = self.grasp_point(solution, name)
             if holding and not pose.held:

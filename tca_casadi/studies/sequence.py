@@ -12,8 +12,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import PhysicsWarning, ScenarioError
+from ..simulation import _failure_text
 from ..solvers.continuation import BranchFollower
 from .compare import compare_solutions
+from ..model.bodies import carried_history
 from .objects import ObjectTracker
 from .sweep_result import bending_angle
 
@@ -101,11 +103,17 @@ class SequenceResult:
             for pose in (self.objects[index] if self.objects else {}).values():
                 c = pose.center * 1e3
                 extra += f"  {pose.name} {'held' if pose.held else 'rests'} at {c[0]:+.1f} {c[1]:+.1f} {c[2]:+.1f}"
+            for body in solution.bodies:             # contact objects: what holds them
+                if body.grips:
+                    extra += (f"  grip {body.grip_force * 1e3:.3g} mN, needs friction {body.needed_friction:.3g}"
+                              + (" SLIPPING" if body.slipping else ""))
             if self.stage and self.stage[index]:
                 extra += f"  ({self.stage[index]})"
             lines.append(f"  {name:<28} tip [mm] {tip[0]:+8.3f} {tip[1]:+8.3f} {tip[2]:+8.3f}  "
                          f"yaw {tip_yaw(solution):+7.2f} deg{extra}{flag}")
         lines += [f"  warning: {w}" for w in self.warnings]
+        lines += [f"  warning: step {name!r}: {w}" for name, solution in zip(self.names, self.solutions)
+                  for w in solution.warnings if w.kind in ("slipping", "penetration")]
         return "\n".join(lines)
 
 
@@ -195,12 +203,19 @@ def _solve_step(sim, before, previous, frames):
     solver = sim.solver("collocation")
     if previous.raw.get("w") is None or previous.raw["w"].size != solver.nlp.scale.size:
         return sim.solve(method="collocation", warn=False), []          # the structure changed: start afresh
+    sim.params = carried_history(sim.robot, sim.params, previous)       # contact objects' grips
+    before = carried_history(sim.robot, before, previous)
     follower = BranchFollower(solver, before, sim.params - before)
     point = follower.point(0.0, previous)
     transition = []
     targets = np.linspace(0, 1, frames + 2)[1:] if frames else [1.0]
     for target in targets:
         point, _, _, failure = follower.advance(point, float(target), float(target - point.lam), 1.0, 1e-4)
+        if failure is not None and sim.robot.bodies:
+            # a grasp's state depends on its path (friction): a solve from the reference state
+            # would teleport the objects; the step is reported stalled where it stopped
+            return sim._stalled(solver, point.solution, before, sim.params, point.lam, 1e-4,
+                                _failure_text(failure), follower.iterations, 0.0), transition
         if failure is not None:
             solution = sim.solve(method="collocation", warn=False)            # from the reference state
             return solution, transition

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..errors import TcaError
 from ..model.rotations import matrix_to_quaternion
+from ..solution import BODY_COLUMNS
 from .sweep_result import bending_angle
 
 #: prepared structures kept per process
@@ -125,6 +126,8 @@ def _empty_columns(sim, outputs):
         names += [f"{actuator.key}.tension [N]", f"{actuator.key}.stroke [m]"]
     for shape in sim.robot.obstacles:
         names += [f"{shape.name}.normal_force [N]", f"{shape.name}.clearance [m]"]
+    for body in sim.robot.bodies:
+        names += [f"{body.name}.{key}" for key in BODY_COLUMNS]
     names += [output_label(name) for name in outputs] + ["balance [-]"]
     return {name: float("nan") for name in names}
 

@@ -1,0 +1,155 @@
+"""Free rigid bodies held by contact and friction (issue 17; docs/contact.md sections 4-5)."""
+import warnings
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from tca_casadi.errors import ScenarioError
+from tca_casadi.simulation import Simulation
+
+PINCH = "scenarios/analytic/free_pinch.yaml"
+SQUEEZE = 2e-3          # [N] inward on each fingertip
+LIFT = 2e-3             # [m] the base rises by this much
+
+
+def _quiet(call, *args, **kwargs):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return call(*args, **kwargs)
+
+
+@pytest.fixture(scope="module")
+def lifted():
+    """``(sim, solutions)``: rest, squeezed (grips close, frictionless, the table holds the
+    block), lifted (grips anchored where they closed: the block hangs on friction)."""
+    sim = Simulation.from_file(PINCH)
+    rest = _quiet(sim.solve)
+    sim.set_parameter("squeeze_left.force", [SQUEEZE, 0, 0])
+    sim.set_parameter("squeeze_right.force", [-SQUEEZE, 0, 0])
+    squeezed = _quiet(sim.solve, warm_start=rest)
+    sim.set_parameter("base.position", [0, 0, LIFT])
+    up = _quiet(sim.solve, warm_start=squeezed)
+    return sim, (rest, squeezed, up)
+
+
+def test_resting_then_squeezed_block_is_held_by_its_table(lifted):
+    _, (rest, squeezed, _) = lifted
+    weight = 1e-4 * 9.81
+    for solution in (rest, squeezed):
+        assert solution.converged
+        block = solution.bodies[0]
+        assert_allclose(block.support_force, [0, 0, weight], rtol=0, atol=1e-12)
+        assert_allclose(block.position, [0, 0, -0.038], rtol=0, atol=1e-11)   # |.| smoothing: 4.5e-12 m
+    grips = squeezed.bodies[0].grips
+    assert len(grips) == 2 and all(c.s == pytest.approx(0.03) for c in grips)
+    # a cantilever's tip pushed by P across a gap d: N = P - 3 E I d / L^3 (d = 0.5 mm), the
+    # small-deflection, shear-free estimate (measured 2e-3 of N off: 0.7 % of the spring part)
+    EI = 10e6 * np.pi * 0.002 ** 4 / 64
+    expected = SQUEEZE - 3 * EI * 0.5e-3 / 0.03 ** 3
+    for c in grips:
+        assert c.normal_force == pytest.approx(expected, rel=5e-3)
+        assert_allclose(c.tangential_force, 0, rtol=0, atol=1e-15)     # closed in this solve: no history
+
+
+def test_lifted_block_hangs_on_friction_half_its_weight_per_finger(lifted):
+    _, (_, squeezed, up) = lifted
+    assert up.converged and not up.warning_texts("slipping")
+    block = up.bodies[0]
+    weight = 1e-4 * 9.81
+    assert not block.resting and np.linalg.norm(block.support_force) < 1e-12
+    assert block.position[2] - squeezed.bodies[0].position[2] == pytest.approx(LIFT, abs=5e-6)
+    for c in block.grips:            # on the rod: half the weight, downwards (symmetry)
+        assert_allclose(c.tangential_force, [0, 0, -weight / 2], rtol=0, atol=1e-12)
+    left, right = block.grips
+    assert left.normal_force == pytest.approx(right.normal_force, rel=1e-9)
+    assert_allclose(block.residual_force, 0, rtol=0, atol=1e-12)
+    assert_allclose(block.residual_moment, 0, rtol=0, atol=1e-14)
+    assert_allclose(block.contact_force, [0, 0, weight], rtol=0, atol=1e-12)   # all through the grips
+    assert up.balance.relative < 1e-8          # the robot: base reaction + grips + own weight
+    assert block.friction_margin == pytest.approx(0.5 * left.normal_force - weight / 2, rel=1e-9)
+
+
+def test_friction_limit_is_the_hand_calculation(lifted):
+    """Heavier and heavier blocks: slipping is reported exactly when m g > 2 mu N (N the
+    reported normal force of each fingertip), with the friction it would need."""
+    sim, (_, _, up) = lifted
+    previous, seen = up, set()
+    for mass in (1.0e-4, 2.0e-4, 2.8e-4, 3.0e-4, 3.4e-4):
+        sim.set_parameter("block.mass", mass)
+        solution = _quiet(sim.solve, warm_start=previous)
+        assert solution.converged
+        block = solution.bodies[0]
+        normal = block.grips[0].normal_force
+        needed = mass * 9.81 / (2 * normal)
+        assert block.needed_friction == pytest.approx(needed, rel=1e-9)
+        assert block.slipping == (mass * 9.81 > 2 * 0.5 * normal)
+        assert bool(solution.warning_texts("slipping")) == block.slipping
+        seen.add(block.slipping)
+        previous = solution
+    assert seen == {True, False}
+    sim.set_parameter("block.mass", 1e-4)
+
+
+def test_block_in_results_and_tables(lifted):
+    _, (_, _, up) = lifted
+    data = up.to_dict()
+    entry = data["objects"][0]
+    assert entry["name"] == "block" and entry["slipping"] is False and entry["resting"] is False
+    assert_allclose(entry["quaternion"], [1, 0, 0, 0], rtol=0, atol=1e-9)
+    assert {c["obstacle"] for c in data["contacts"]} == {"block"}
+    columns = up.contact_columns()
+    assert columns["block.grip_force [N]"] == pytest.approx(up.bodies[0].grip_force)
+    assert columns["block.support_force [N]"] < 1e-12
+
+
+def test_cold_solve_starts_from_no_history(lifted):
+    """A cold solve forgets the grasp (the history parameters return to the scenario's) and
+    follows the loads up from the reference state, grips sticking from where they close on the
+    way: an equilibrium of the block and of the robot."""
+    sim, _ = lifted
+    cold = _quiet(sim.solve)
+    assert cold.converged
+    assert sim.get_parameter("objects.block.grip.left.3.sticks") == 0.0
+    assert np.abs(cold.bodies[0].residual_force).max() < 1e-12 and cold.balance.relative < 1e-8
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"mass": 0}, "needs a mass > 0"),
+    ({"support": None}, "needs a support"),
+    ({"held": True}, "held is for objects without contact"),
+    ({"support": "tabel"}, "unknown obstacle 'tabel'"),
+    ({"position": [0, 0, -0.037]}, "lies 1 mm above its support 'table'"),
+])
+def test_bad_contact_objects(change, message):
+    import yaml
+    with open(PINCH) as handle:
+        raw = yaml.safe_load(handle)
+    raw["objects"][0].update(change)
+    with pytest.raises(ScenarioError, match=message):
+        Simulation.from_file(raw).solve()
+
+
+def test_physical_pick_and_place():
+    """scenarios/arm_pick_and_place_contact.yaml: both fingertips press on the bar, its weight
+    reaches the arm only through them (friction), it rises with the arm and turns with it."""
+    from tca_casadi.studies.sequence import run_sequence
+    sim = Simulation.from_file("scenarios/arm_pick_and_place_contact.yaml")
+    result = run_sequence(sim)
+    assert result.converged
+    names = result.names
+    closing, lifting, turning = (result.solutions[names.index(n)] for n in
+                                 ("gripper closes on the bar", "arm lifts the bar", "twisting module cools back"))
+    weight = 0.5e-3 * 9.81
+    for solution in (lifting, turning):
+        bar = solution.bodies[0]
+        assert {c.module for c in bar.grips} == {"finger_a", "finger_b"}
+        assert all(c.normal_force > 1e-3 for c in bar.grips)
+        assert not bar.resting and not bar.slipping and bar.needed_friction < bar.grips[0].friction
+        assert_allclose(bar.contact_force, [0, 0, weight], rtol=0, atol=1e-9)
+        assert np.abs(bar.residual_force).max() < 1e-12
+        assert solution.balance.relative < 1e-6
+    assert closing.bodies[0].resting
+    assert lifting.bodies[0].position[2] - closing.bodies[0].position[2] > 8e-3
+    x_axis = turning.bodies[0].rotation[:, 0]
+    assert abs(x_axis[1]) > 0.99         # turned 90 deg about z with the gripper
