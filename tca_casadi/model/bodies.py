@@ -42,9 +42,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .arith import cross, is_casadi, sqrt
-from .contact import normal_contact
 from .obstacles import SMOOTHING, Box
-from .rotations import rotation_matrix, rotation_numpy
+
+# (casadi, and the modules that import it, are imported where used: ``validate`` declares the
+# history parameters through this module without loading any numerical library)
 
 #: width of the smooth step between sticking and no friction, on ``f / f_s - g / g_s``
 STICK_SMOOTHING = 1e-3
@@ -93,6 +94,7 @@ def gibbs_quaternion(g):
 
 def body_rotation(body, g):
     """``R0 R(g)`` (3, 3): the body's orientation for its Gibbs vector ``g``."""
+    from .rotations import rotation_matrix, rotation_numpy
     if is_casadi(g):
         import casadi as ca
         return ca.DM(body.rotation) @ rotation_matrix(gibbs_quaternion(g))
@@ -160,6 +162,7 @@ def support_equations(plane, body, r, R, anchor_pose, sticks, force, moment, for
     """The six scaled support equations (module docstring): ``force``, ``moment`` (3,) the
     support's reaction on the body at its lowest point [N, N m]."""
     import casadi as ca
+    from .contact import normal_contact
     length = body.length_scale
     g, n, _ = support_geometry(plane, body, r, R)
     r_anchor, R_anchor = body_pose(body, anchor_pose)
@@ -200,6 +203,8 @@ def grip_points(scenario, points=None):
     """``[(body index, module index, K, s), ...]``: the grip candidates of every contact object,
     the candidate points (:func:`~.contact.candidate_points`: ends, ``contact.points`` evenly
     spaced, ``contact.at``) of each module that may touch it, ``K`` numbering them per module."""
+    if not contact_objects(scenario):
+        return []
     from .contact import candidate_points
     names = [m.name for m in scenario.modules]
     given = {names.index(name): s for name, s in scenario.contact.at.items() if name in names}

@@ -564,6 +564,8 @@ def _contacts(scenario, modules, added):
 def _bodies(scenario, obstacles):
     """``(bodies, grips)`` of the scenario's contact objects (:mod:`.bodies`)."""
     from .bodies import BodyModel, contact_objects, grip_points
+    if not contact_objects(scenario):
+        return [], []
     from .contact import ContactModel
     names = [o.name for o in obstacles]
     bodies = []

@@ -61,6 +61,8 @@ def test_every_parameter_name_is_a_set_path_of_the_scenario(scenarios):
         sim = Simulation.from_file(path)
         robot = sim.robot
         for name in sim.robot.layout.names():
+            if robot.layout.entries[name].source[0] == "history":
+                continue          # contact objects' history: copied from a warm start, not a scenario key
             value = sim.get_parameter(name)
             if np.ndim(value):
                 continue
