@@ -315,6 +315,33 @@ def contact_rates(repeats):
             row["unknowns"] = int(sim.solver().nlp.w.numel())
             out[f"{label} {key} contact"] = row
             clear_built_solvers()
+    out.update(grasp_rates(repeats))
+    return out
+
+
+def grasp_rates(repeats):
+    """The free-body pinch (``scenarios/analytic/free_pinch.yaml``) with and without its block
+    and table: build, cold, and the warm solve that lifts the squeezed block 1 mm (the grips
+    stick where they closed; without the block, the same squeeze and lift)."""
+    import yaml
+    from tca_casadi.solvers.collocation import clear_built_solvers
+    with open(SCENARIOS / "analytic" / "free_pinch.yaml") as handle:
+        with_block = yaml.safe_load(handle)
+    without = {k: v for k, v in with_block.items() if k not in ("objects", "obstacles")}
+    out = {}
+    for key, raw in (("without", without), ("with", with_block)):
+        row = {}
+        row["build_s"], row["cold_s"], sim, cold = first_solves(raw, repeats)
+        sim.set_parameter("squeeze_left.force", [2e-3, 0, 0])
+        sim.set_parameter("squeeze_right.force", [-2e-3, 0, 0])
+        squeezed = sim.solve(warm_start=cold, warn=False)
+        sim.set_parameter("base.position", [0, 0, 1e-3])
+        row["warm_s"], warm = median_time(lambda: sim.solve(warm_start=squeezed, warn=False), max(repeats, 5))
+        row["converged"] = bool(cold.converged and squeezed.converged and warm.converged)
+        row["contacts"] = len(warm.contacts)
+        row["unknowns"] = int(sim.solver().nlp.w.numel())
+        out[f"free pinch {key} block"] = row
+        clear_built_solvers()
     return out
 
 

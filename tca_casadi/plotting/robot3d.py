@@ -121,13 +121,13 @@ def _draw_loads(ax, loads, points):
 def _draw_contacts(ax, contacts, points):
     """Contact forces on the rods as arrows (a fifth of the drawing for the largest)."""
     size = float(np.max(np.ptp(points, axis=1))) if points.size else 1.0
-    largest = max((c.normal_force for c in contacts), default=0.0)
+    largest = max((float(np.linalg.norm(c.force)) for c in contacts), default=0.0)   # friction included
     drawn = []
     for k, contact in enumerate(contacts):
         at = np.asarray(contact.position) * 1e3
         arrow = contact.force * 0.2 * size / largest
         ax.quiver(*(at - arrow), *arrow, color=COLORS["contact"], linewidth=1.8, arrow_length_ratio=0.25,
-                  label=f"contact forces (largest {largest * 1e3:.3g} mN)" if k == 0 else None)
+                  label=f"contact forces on the rods (largest {largest * 1e3:.3g} mN)" if k == 0 else None)
         drawn.append(np.column_stack([at - arrow, at]))
     return drawn
 

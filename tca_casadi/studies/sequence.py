@@ -174,7 +174,8 @@ def stage_motion(robot, before, after):
 
 def _track_objects(result, tracker, solution, name):
     """Objects and gripper opening after a step; a warning when a grasp is not across the object."""
-    newly_held = [n for n in tracker.names if tracker.held_in(solution, n) and not tracker.poses[n].held]
+    newly_held = [n for n in tracker.names if tracker.held_in(solution, n) and not tracker.poses[n].held
+                  and n not in tracker.free]        # a contact object's grasp is solved, not guessed
     result.objects.append(tracker.advance(solution, name))
     result.openings.append(tracker.opening(solution, tracker.names[0]) if tracker.names else None)
     for object_name in newly_held:

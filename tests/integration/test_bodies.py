@@ -153,3 +153,45 @@ def test_physical_pick_and_place():
     assert lifting.bodies[0].position[2] - closing.bodies[0].position[2] > 8e-3
     x_axis = turning.bodies[0].rotation[:, 0]
     assert abs(x_axis[1]) > 0.99         # turned 90 deg about z with the gripper
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_random_pinches_obey_the_balance_laws(seed):
+    """Random pinches (moduli, finger sizes, gaps, unequal squeezes, masses): while supported
+    and once lifted, every grip has g >= -1e-9 m, f >= 0, |f g| tiny; the block's equilibrium
+    and the robot's global balance hold; lifted, the grips' forces on the rods add up to the
+    block's weight."""
+    import yaml
+    rng = np.random.default_rng(seed)
+    with open(PINCH) as handle:
+        raw = yaml.safe_load(handle)
+    raw["materials"]["rubber"]["youngs_modulus"] = float(rng.uniform(5e6, 20e6))
+    diameter = float(rng.uniform(1.5e-3, 2.5e-3))
+    gap = float(rng.uniform(0.2e-3, 0.6e-3))
+    half = 6e-3 - diameter / 2 - gap
+    for module in raw["modules"][1:]:
+        module["cross_section"]["diameter"] = diameter
+    mass = float(rng.uniform(0.05e-3, 0.2e-3))
+    block = raw["objects"][0]
+    block.update(mass=mass, size=[2 * half, 0.009, 0.009], friction=float(rng.uniform(0.5, 1.5)))
+    sim = Simulation.from_file(raw)
+    previous = _quiet(sim.solve)
+    squeeze = rng.uniform(1.5e-3, 3e-3, 2)
+    sim.set_parameter("squeeze_left.force", [squeeze[0], 0, 0])
+    sim.set_parameter("squeeze_right.force", [-squeeze[1], 0, 0])
+    for lift in (0.0, 1e-3):
+        sim.set_parameter("base.position", [0, 0, lift])
+        solution = _quiet(sim.solve, warm_start=previous)
+        assert solution.converged, solution.message
+        body = solution.bodies[0]
+        for c in body.grips:
+            assert c.gap >= -1e-9 and c.normal_force >= 0 and abs(c.gap * c.normal_force) < 1e-12
+        assert np.abs(body.residual_force).max() < 1e-12 and np.abs(body.residual_moment).max() < 1e-13
+        assert solution.balance.relative < 1e-8
+        previous = solution
+    assert not body.resting and len(body.grips) == 2
+    # unequal squeezes shift and tilt the block a little (its faces' normals are not quite +-x,
+    # so the normal forces differ by ~0.3 %), but the grips' total force on the rods is the
+    # block's weight, nothing sideways
+    total = sum(c.force for c in body.grips)
+    assert_allclose(total, [0, 0, -mass * 9.81], rtol=0, atol=1e-12)
