@@ -226,7 +226,8 @@ def _validate(args):
           f"{len(scenario.loads)} load(s), {len(scenario.objects)} object(s); tip: "
           f"{robot.modules[robot.tip_index].name}")
     import numpy as np
-    history = [name for name in robot.layout.names() if robot.layout.entries[name].source[0] == "history"]
+    from .model.bodies import history_names_of
+    history = history_names_of(robot)
     names = [name for name in robot.layout.names() if name not in history]
     print(f"parameters ({len(names)}: --set or sweep them without rebuilding the model):")
     from .units import UNIT_OF

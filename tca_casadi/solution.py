@@ -150,17 +150,15 @@ class BodyResult:
     def of(cls, body, r, R, weight, forces, grips, support):
         """From the pose ``(r, R)``, ``weight`` (3,), the rods' ``forces`` ``[(point, force on the
         rod)]``, the closed ``grips`` and ``support`` ``(point, force, moment, gap, friction)`` or None."""
+        from .model.bodies import body_equilibrium
         r, R, weight = np.asarray(r, float).ravel(), np.asarray(R, float), np.asarray(weight, float).ravel()
-        force, moment = np.zeros(3), np.zeros(3)
-        for point, on_rod in forces:
-            on_rod = np.asarray(on_rod, float).ravel()
-            force -= on_rod
-            moment -= np.cross(np.asarray(point, float).ravel() - r, on_rod)
+        forces = [(np.asarray(point, float).ravel(), np.asarray(on_rod, float).ravel()) for point, on_rod in forces]
         zero = np.zeros(3)
+        force, moment = body_equilibrium(r, zero, forces)            # what the grips put on it
         point, reaction, couple, gap, friction = support if support is not None else (r, zero, zero, np.inf, 0.0)
         reaction, couple = np.asarray(reaction, float), np.asarray(couple, float)
-        residual_force = force + reaction + weight
-        residual_moment = moment + np.cross(point - r, reaction) + couple
+        residual_force, residual_moment = body_equilibrium(r, weight, forces, (np.asarray(point, float), reaction,
+                                                                                couple))
         return cls(body.name, r, R, grips, force, moment, weight, reaction, couple, float(gap), float(friction),
                    residual_force, residual_moment)
 

@@ -30,7 +30,7 @@ import numpy as np
 from ..model import boundary
 from ..model.compatibility import compatibility_residuals
 from ..model.bodies import (body_equilibrium, body_pose, body_scales, body_shape, grip_friction, support_equations,
-                             support_geometry)
+                             support_geometry, support_parameter)
 from ..model.contact import contact_geometry, normal_contact, outline_size
 from ..model.loads import distributed_fields, is_active
 from ..model.rod import STATE_SIZE, rod_equations
@@ -376,13 +376,14 @@ class CollocationNLP:
         (:mod:`tca_casadi.model.bodies`)."""
         robot = self.robot
         on_body = [[] for _ in robot.bodies]
+        poses = [(shape.position, shape.rotation) for shape in self._body_shapes]      # (r, R) of each body
         for c in robot.grips:
-            module, body = robot.modules[c.module], robot.bodies[c.body]
+            module = robot.modules[c.module]
             node = self._node_at[c.module][_breakpoint(self._node_at[c.module], c.s)]
             g, n, point = contact_geometry(self._body_shapes[c.body], module, node)
             fs, gs = module.force_scale, outline_size(module)
             f, t = self._grip_forces[c.index], self._grip_tangents[c.index]
-            r, R = body_pose(body, self._poses[c.body])
+            r, R = poses[c.body]
             self._g.append(normal_contact(f, g, fs, gs))
             self._g.append(grip_friction(point, n, r, R, self.param(robot.grip_parameter(c, "anchor")),
                                          self.param(robot.grip_parameter(c, "sticks")), f, t, g, fs, gs))
@@ -390,7 +391,7 @@ class CollocationNLP:
         supports = {b: (force, moment) for b, force, moment in self._supports}
         for body in robot.bodies:
             fo, lo = body_scales(body)
-            r, R = body_pose(body, self._poses[body.index])
+            r, R = poses[body.index]
             weight = self.param(f"{body.name}.mass") * self.param("gravity")
             support = None
             if body.index in supports:
@@ -398,9 +399,9 @@ class CollocationNLP:
                 plane = robot.obstacle_of(body.support, self.param)
                 _, _, point = support_geometry(plane, body, r, R)
                 support = (point, force, moment)
-                prefix = f"objects.{body.name}.support."
-                self._g.append(support_equations(plane, body, r, R, self.param(prefix + "anchor"),
-                                                 self.param(prefix + "sticks"), force, moment, fo))
+                self._g.append(support_equations(plane, body, r, R, self.param(support_parameter(body.name, "anchor")),
+                                                 self.param(support_parameter(body.name, "sticks")), force, moment,
+                                                 fo))
             force, moment = body_equilibrium(r, weight, on_body[body.index], support)
             self._g.append(ca.vertcat(force / fo, moment / (fo * lo)))
 

@@ -218,6 +218,21 @@ def grip_points(scenario, points=None):
     return out
 
 
+def grip_parameter(body, module, number, key):
+    """The name of a grip's history parameter ``key`` (``anchor`` or ``sticks``): ``body``,
+    ``module`` names, ``number`` its place among the module's candidates."""
+    return f"objects.{body}.grip.{module}.{number}.{key}"
+
+
+def support_parameter(body, key):
+    """The name of a body's support history parameter ``key`` (``anchor`` or ``sticks``)."""
+    return f"objects.{body}.support.{key}"
+
+
+#: the first element of a history parameter's ``source`` (it is no scenario key)
+HISTORY = "history"
+
+
 def history_names(scenario):
     """The history parameters of the contact objects, ``[(name, size), ...]`` (module
     docstring): per grip ``objects.NAME.grip.MODULE.K.anchor`` (3) and ``.sticks``; per
@@ -225,11 +240,11 @@ def history_names(scenario):
     bodies = contact_objects(scenario)
     out = []
     for b, m, K, _ in grip_points(scenario):
-        prefix = f"objects.{bodies[b][1].name}.grip.{scenario.modules[m].name}.{K}"
-        out += [(prefix + ".anchor", 3), (prefix + ".sticks", 1)]
+        out += [(grip_parameter(bodies[b][1].name, scenario.modules[m].name, K, key), size)
+                for key, size in (("anchor", 3), ("sticks", 1))]
     for _, item in bodies:
         if item.support is not None:
-            out += [(f"objects.{item.name}.support.anchor", 6), (f"objects.{item.name}.support.sticks", 1)]
+            out += [(support_parameter(item.name, "anchor"), 6), (support_parameter(item.name, "sticks"), 1)]
     return out
 
 
@@ -250,7 +265,7 @@ def carried_history(robot, params, solution):
     if not robot.bodies:
         return params
     layout = robot.layout
-    names = [name for name, _ in history_names_of(robot)]
+    names = history_names_of(robot)
     if solution is None or not solution.bodies:
         for name in names:
             params[layout[name]] = robot.values[layout[name]]
@@ -269,20 +284,13 @@ def carried_history(robot, params, solution):
         found = results.get(body.name)
         if body.support is None or found is None:
             continue
-        prefix = f"objects.{body.name}.support."
-        params[layout[prefix + "sticks"]] = 1.0 if found.resting else 0.0
+        params[layout[support_parameter(body.name, "sticks")]] = 1.0 if found.resting else 0.0
         if found.resting:
-            params[layout[prefix + "anchor"]] = np.r_[found.position - body.position,
+            params[layout[support_parameter(body.name, "anchor")]] = np.r_[found.position - body.position,
                                                       gibbs_of(body.rotation.T @ found.rotation)]
     return params
 
 
 def history_names_of(robot):
-    """The history parameter names of a robot's bodies (as :func:`history_names`)."""
-    out = []
-    for c in robot.grips:
-        out += [(robot.grip_parameter(c, "anchor"), 3), (robot.grip_parameter(c, "sticks"), 1)]
-    for body in robot.bodies:
-        if body.support is not None:
-            out += [(f"objects.{body.name}.support.anchor", 6), (f"objects.{body.name}.support.sticks", 1)]
-    return out
+    """The names of a robot's history parameters (declared by :func:`history_names`)."""
+    return [name for name in robot.layout.names() if robot.layout.entries[name].source[0] == HISTORY]

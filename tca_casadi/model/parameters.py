@@ -160,11 +160,11 @@ def declare(scenario, actuators, point_loads, distributed):
         put(f"{item.name}.mass", item.mass, "mass", ("objects", k, "mass"), 0.0)
         if not item.contact:
             put(f"{item.name}.held", float(item.held), "dimensionless", ("objects", k, "held"), 0.0)
-    from .bodies import history_names
+    from .bodies import HISTORY, history_names
     for name, size in history_names(scenario):      # set from the solution a solve starts from
         sticks = name.endswith(".support.sticks")   # placed resting on its support; no grip yet
         put(name, np.full(size, float(sticks)) if name.endswith("sticks") else np.zeros(size), "dimensionless",
-            ("history",) + tuple(name.split(".")))
+            (HISTORY,) + tuple(name.split(".")))
     for k, obstacle in enumerate(scenario.obstacles):      # moved without a rebuild (a grasp, a study)
         put(f"obstacles.{obstacle.name}.position", obstacle.position, "length", ("obstacles", k, "position"))
         for key in OBSTACLE_SIZES.get(obstacle.shape, ()):

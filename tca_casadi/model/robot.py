@@ -259,7 +259,8 @@ class Robot:
 
     def grip_parameter(self, c, key):
         """The name of a grip's history parameter ``key`` (``anchor`` or ``sticks``)."""
-        return f"objects.{self.bodies[c.body].name}.grip.{self.modules[c.module].name}.{c.number}.{key}"
+        from .bodies import grip_parameter
+        return grip_parameter(self.bodies[c.body].name, self.modules[c.module].name, c.number, key)
 
     @property
     def unknowns(self):
@@ -566,12 +567,12 @@ def _bodies(scenario, obstacles):
     from .bodies import BodyModel, contact_objects, grip_points
     if not contact_objects(scenario):
         return [], []
+    from .rotations import rotation_numpy
     from .contact import ContactModel
     names = [o.name for o in obstacles]
     bodies = []
     for b, (_, item) in enumerate(contact_objects(scenario)):
-        yaw = item.yaw
-        rotation = np.array([[np.cos(yaw), -np.sin(yaw), 0], [np.sin(yaw), np.cos(yaw), 0], [0, 0, 1.0]])
+        rotation = rotation_numpy(np.array([np.cos(item.yaw / 2), 0.0, 0.0, np.sin(item.yaw / 2)]))   # about z
         holders = tuple(m for m, module in enumerate(scenario.modules) if module.name in item.held_by)
         bodies.append(BodyModel(item.name, b, float(item.mass), np.asarray(item.size, float), np.asarray(item.position, float),
                                 rotation, float(item.friction),

@@ -138,7 +138,7 @@ def body_results(robot, params, module_data, values):
     :class:`BodyResult` per body, a ``slipping`` warning for each grip that needs more friction
     than it has, and each grip's and support's side of its complementarity's corner.
     ``values``: ``{"grips": [(f_n, f_t (3)), ...], "poses": [(6,), ...], "supports": {b: (6,)}}`` [SI]."""
-    from ..model.bodies import body_pose, body_shape, support_geometry
+    from ..model.bodies import body_pose, body_scales, body_shape, support_geometry
     from ..solution import BodyResult
     param = robot.param_function(params)
     closed, loads, warnings, pattern = [], {}, [], []
@@ -171,7 +171,8 @@ def body_results(robot, params, module_data, values):
         plane = robot.obstacle_of(body.support, param) if body.support is not None else None
         if plane is not None:
             g, normal, point = support_geometry(plane, body, r, R)
-            pattern.append(float(np.dot(normal, support[0:3])) / (body.mass * 9.81) > float(g) / body.length_scale)
+            weight_scale, length_scale = body_scales(body)
+            pattern.append(float(np.dot(normal, support[0:3])) / weight_scale > float(g) / length_scale)
         weight = float(param(f"{body.name}.mass")[0]) * param("gravity")
         bodies.append(BodyResult.of(body, r, R, weight, forces, [c for c in closed if c.obstacle == body.name],
                                     None if plane is None else (np.asarray(point, float).ravel(), support[0:3],

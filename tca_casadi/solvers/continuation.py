@@ -169,7 +169,7 @@ def history_indices(robot):
     support anchors, :mod:`tca_casadi.model.bodies`)."""
     from ..model.bodies import history_names_of
     names = history_names_of(robot) if getattr(robot, "bodies", None) else []
-    return np.array([i for name, _ in names for i in range(robot.layout.size)[robot.layout[name]]], int)
+    return np.array([i for name in names for i in range(robot.layout.size)[robot.layout[name]]], int)
 
 
 def _slack_pattern(solution):
