@@ -385,6 +385,12 @@ class Solution:
             if not self.contacts:
                 nearest = min(self.clearance.items(), key=lambda item: item[1]["gap"])
                 lines.append(f"  no contact; nearest obstacle {nearest[0]!r} {nearest[1]['gap'] * 1e3:.4g} mm away")
+        for body in self.bodies:          # contact objects: where they are, what holds them
+            at = " ".join(signed(x * 1e3) for x in body.position)
+            held = (f"grip {body.grip_force * 1e3:.4g} mN, needs friction {body.needed_friction:.3g} of "
+                    f"{body.grips[0].friction:.3g}{', SLIPPING' if body.slipping else ''}" if body.grips else "not gripped")
+            rests = f"; its support carries {np.linalg.norm(body.support_force) * 1e3:.4g} mN" if body.resting else ""
+            lines.append(f"  object {body.name} at [{at}] mm: {held}{rests}")
         lines += [f"  warning: {w}" for w in self.warnings]
         if not self.converged and not self.warning_texts("not_converged"):
             lines.append(f"  message: {self.message}")

@@ -98,6 +98,8 @@ def test_block_in_results_and_tables(lifted):
     assert entry["name"] == "block" and entry["slipping"] is False and entry["resting"] is False
     assert_allclose(entry["quaternion"], [1, 0, 0, 0], rtol=0, atol=1e-9)
     assert {c["obstacle"] for c in data["contacts"]} == {"block"}
+    line = next(line for line in up.summary().splitlines() if line.startswith("  object block"))
+    assert f"needs friction {up.bodies[0].needed_friction:.3g} of 0.5" in line and "support" not in line
     columns = up.contact_columns()
     assert columns["block.grip_force [N]"] == pytest.approx(up.bodies[0].grip_force)
     assert columns["block.support_force [N]"] < 1e-12
