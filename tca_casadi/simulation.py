@@ -13,7 +13,8 @@ import numpy as np
 
 from .errors import ScenarioError
 from .model import Robot
-from .model.bodies import carried_history
+from .model.bodies import carried_history, history_names_of
+from .solvers.assemble import record_slides
 from .scenario import load_scenario
 from .scenario.loader import validate
 from .scenario.overrides import apply_overrides
@@ -121,6 +122,7 @@ class Simulation:
         continuation = continuation or self.scenario.solver.continuation
         initial = self.last if warm_start == "last" else warm_start
         self.params = carried_history(self.robot, self.params, initial)   # contact objects' grips
+        start = self.params.copy()
         if initial is None and continuation == "never":      # continuation checks it itself
             self.robot.check_clear(self.robot.rest_parameters(self.params))
         if continuation == "always" or (continuation == "auto" and initial is None):
@@ -140,6 +142,7 @@ class Simulation:
                 and solver.estimates_error:
             solver, solution = localise(self, solver, solution)         # contacts between candidates
             self._solvers[method or self.method] = solver
+        record_slides(self.robot, start, solution)
         self.last = solution
         if warn:
             for warning in solution.warnings:
@@ -163,6 +166,7 @@ class Simulation:
         if solution is None or _needs_continuation(solution):
             cold = self.continue_from_rest(solver)
             solution = cold if solution is None else _better(solution, cold)
+        record_slides(self.robot, self.params, solution)
         self.last = solution
         return solution
 
@@ -204,10 +208,12 @@ class Simulation:
         not turn) continuation from
         ``initial``'s parameters to these, then from the reference state when that is clear of
         every obstacle, IPOPT last."""
+        start = initial.parameters
+        if self.robot.bodies and initial.converged and start is not None and start.size == self.params.size:
+            return self._follow_from(solver, initial)
         ipopt = solver.options.algorithm == "ipopt"
         solution = solver.solve_ipopt(self.params, initial) if ipopt else \
             solver.solve_newton(self.params, solver.initial_guess(self.params, initial))
-        start = initial.parameters
         if _needs_continuation(solution) and initial.converged and start is not None and start.size == self.params.size:
             follow = _follow_branch(solver, start, self.params.copy(), initial, 0.25, 1e-3)
             solution = _better(solution, follow[0] if follow[1] == 1.0 else solution)
@@ -217,21 +223,55 @@ class Simulation:
             solution = _better(solution, solver.solve_ipopt(self.params, initial))
         return solution
 
-    def _stalled(self, solver, reached, rest, target, lam, min_step, last_failure, iterations, elapsed):
+    def _follow_from(self, solver, initial):
+        """A warm solve of a robot with contact objects: continuation from ``initial``'s
+        parameters to these (friction depends on the path: the whole step first, halved where
+        a grasp closes or opens, a jump refused), never a solve from the reference state (it
+        would put the objects back where they were placed); stalled when it cannot go on."""
+        started = time.perf_counter()
+        start, target = initial.parameters.copy(), self.params.copy()
+        solution, lam, steps, iterations, failure = _follow_branch(solver, start, target, initial, 1.0, 1e-4)
+        if lam < 1.0:
+            return self._stalled(solver, solution, start, target, lam, 1e-4, failure, iterations,
+                                 time.perf_counter() - started, origin="the previous solution")
+        solution.result = solution.result.noted(f"continuation from the previous solution, {steps} steps").replace(
+            solve_time_s=time.perf_counter() - started, nit=iterations)
+        return solution
+
+    def _stalled(self, solver, reached, rest, target, lam, min_step, last_failure, iterations, elapsed,
+                 origin="the reference state"):
         """The unconverged result of a continuation that stopped at ``lam``: the state it reached,
         reported at the user's parameters (their values in the table, the residual there), with
         how far it got, the parameter values reached and what the last step did."""
-        changed = [name for name in self.robot.layout.names()
-                   if np.any(rest[self.robot.layout[name]] != target[self.robot.layout[name]])]
+        history = set(history_names_of(self.robot))
+        changed = [name for name in self.robot.layout.names() if name not in history
+                   and np.any(rest[self.robot.layout[name]] != target[self.robot.layout[name]])]
         reached_values = rest + lam * (target - rest)
         where = "; ".join(f"{name} {_format(reached_values[self.robot.layout[name]])} of "
                           f"{_format(target[self.robot.layout[name]])}" for name in changed[:6])
         more = f" and {len(changed) - 6} more" if len(changed) > 6 else ""
         detail = (f"stalled at lambda = {lam:.4f} of 1 (step below {min_step}); reached {where}{more}; "
-                  f"the max scaled residual above is at the requested parameters; last step: {last_failure}")
-        status = SolveStatus(Status.STALLED, "continuation from the reference state", nit=iterations,
+                  f"the max scaled residual above is at the requested parameters; last step: {last_failure}"
+                  f"{_held_by_sliding(reached)}")
+        status = SolveStatus(Status.STALLED, f"continuation from {origin}", nit=iterations,
                              tolerance=reached.result.tolerance, solve_time_s=elapsed, detail=detail)
         return solver.evaluate(reached.raw.get("w", reached.raw.get("z")), target, status)
+
+
+#: a grip within this fraction of its friction (``mu f_n``) of Coulomb's cone is at its limit
+AT_LIMIT = 1e-3
+
+
+def _held_by_sliding(solution):
+    """What a stall means for a contact object off its support held by grips that are all at
+    their friction limit (sliding, or within :data:`AT_LIMIT` of it): nothing can hold more of
+    it there (``""`` if none is)."""
+    names = [body.name for body in solution.bodies if body.grips and not body.resting and all(
+        c.sliding or c.friction_margin <= AT_LIMIT * c.friction * c.normal_force for c in body.grips)]
+    if not names:
+        return ""
+    return (f"; object {', '.join(map(repr, names))} hangs there on grips all at their friction limit: "
+            "past that point the grasp cannot hold it (it would drop)")
 
 
 def _format(values):
@@ -254,6 +294,10 @@ def _failure_text(failure):
     """What the last rejected continuation step did."""
     if not failure.trial.converged:
         return failure.trial.message
+    if failure.dropped:
+        return (f"object {', '.join(map(repr, failure.dropped))} would drop: it jumps {failure.moved * 1e3:.3g} mm "
+                "within the smallest step continuation takes (its grasp lets go of it, or it snaps to another "
+                "equilibrium); where it lands is not a static result")
     if failure.crossed:
         return ("it converged, but det J changes sign within the step: a fold or a bifurcation "
                 "lies between (sweep the parameter with --arclength to follow the branch)")

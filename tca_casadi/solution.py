@@ -79,11 +79,19 @@ class ActuatorResult:
                 "tension_only": self.tension_only, "slack_length": self.slack_length}
 
 
+#: a grip whose rod point moved more than this over its body during a solve slid [m] (a
+#: sticking grip's point creeps by ~1e-8 m over a continuation as the contact normal turns)
+SLID = 1e-6
+
+
 @dataclass
 class ContactResult:
     """One closed contact (a candidate whose normal force is not zero; issue 17): where, the
     obstacle's outward normal, the forces [N] and the gap [m] (global frame, SI). Frictionless
-    contacts carry no tangential force; ``friction_margin = friction f_n - |f_t|`` [N]."""
+    contacts carry no tangential force; ``friction_margin = friction f_n - |f_t|`` [N];
+    ``sliding``: a grip on Coulomb's cone sliding over the body (``contact.friction_law:
+    coulomb``), ``slip`` [m] how far over the last step, ``slid`` [m] how far its rod point
+    moved over the body since the state the solve started from (Coulomb: the grasp slid)."""
     module: str
     s: float
     obstacle: str
@@ -93,6 +101,9 @@ class ContactResult:
     tangential_force: np.ndarray
     gap: float
     friction: float
+    sliding: bool = False
+    slip: float = 0.0
+    slid: float = 0.0
 
     @property
     def force(self):
@@ -110,14 +121,16 @@ class ContactResult:
 
     @property
     def slipping(self):
-        return self.friction_margin < 0
+        """It needs more friction than it has (sticking), or it slides or slid (Coulomb)."""
+        return self.sliding or self.slid > SLID or self.friction_margin < 0
 
     def as_dict(self):
         return {"module": self.module, "s": self.s, "obstacle": self.obstacle,
                 "position": np.asarray(self.position).tolist(), "normal": np.asarray(self.normal).tolist(),
                 "normal_force": self.normal_force, "tangential_force": np.asarray(self.tangential_force).tolist(),
                 "gap": self.gap, "friction": self.friction, "friction_margin": self.friction_margin,
-                "needed_friction": self.needed_friction, "slipping": self.slipping}
+                "needed_friction": self.needed_friction, "slipping": self.slipping, "sliding": self.sliding,
+                "slip": self.slip, "slid": self.slid}
 
 
 #: a contact object's table columns (:meth:`Solution.contact_columns`), in order
@@ -125,13 +138,60 @@ BODY_COLUMNS = ("grip_force [N]", "friction_margin [N]", "support_force [N]", "z
 
 
 @dataclass
+class SupportCorners:
+    """A body's eight corners against its support (global frame, SI): ``positions`` (8, 3),
+    ``normal_forces`` (8,) and ``tangential_forces`` (8, 3) on the body, ``gaps`` (8,) to the
+    plane, ``sliding`` (8,) on Coulomb's cone; ``normal`` (3,) the plane's outward normal."""
+    positions: np.ndarray
+    normal_forces: np.ndarray
+    tangential_forces: np.ndarray
+    gaps: np.ndarray
+    sliding: np.ndarray
+    normal: np.ndarray
+    force_scale: float
+
+    @property
+    def pressed(self):
+        """(8,) bool: the corners the support pushes on."""
+        from .model.contact import CLOSED
+        return self.normal_forces > CLOSED * self.force_scale
+
+    @property
+    def forces(self):
+        """(8, 3) the support's force on the body at each corner [N]."""
+        return self.normal_forces[:, None] * self.normal[None, :] + self.tangential_forces
+
+    @property
+    def centre_of_pressure(self):
+        """Where the support's normal force acts (3,) [m] (the corners' mean when it carries none)."""
+        total = float(self.normal_forces.sum())
+        if total <= 0:
+            return self.positions.mean(axis=0)
+        return (self.normal_forces[:, None] * self.positions).sum(axis=0) / total
+
+    def needed_friction(self):
+        """The friction the support's resultant needs to hold the body without sliding,
+        ``|F_t| / F_n`` (0 when it carries nothing)."""
+        total = float(self.normal_forces.sum())
+        return float(np.linalg.norm(self.tangential_forces.sum(axis=0))) / total if total > 0 else 0.0
+
+    def as_list(self):
+        """The pressed corners, as JSON: position, normal and tangential force, gap, sliding."""
+        return [{"corner": j, "position": self.positions[j].tolist(), "normal_force": float(self.normal_forces[j]),
+                 "tangential_force": self.tangential_forces[j].tolist(), "gap": float(self.gaps[j]),
+                 "sliding": bool(self.sliding[j])} for j in np.flatnonzero(self.pressed)]
+
+
+@dataclass
 class BodyResult:
     """A free rigid body at equilibrium (a contact object, issue 17): its pose, what the rods'
     contacts put on it (``contact_force`` [N], ``contact_moment`` about its centre [N m]), its
-    support's reaction (at its lowest point: ``support_force``, ``support_moment``), its
+    support's reaction (the sum of its corners' forces ``support_force``, acting at the centre
+    of pressure ``support_point`` with the couple ``support_moment``; per corner ``corners``), its
     ``weight`` and the residual of its equilibrium (all global frame, SI). ``grip_force`` [N]:
     the sum of its closed grips' normal forces; ``friction_margin`` [N]: the smallest of theirs;
-    ``slipping``: some grip needs more friction than the body has."""
+    ``slipping``: some grip needs more friction than the body has, or slides;
+    ``support_slipping``: the support needs more friction than it has, or a corner slides."""
     name: str
     position: np.ndarray
     rotation: np.ndarray
@@ -141,26 +201,31 @@ class BodyResult:
     weight: np.ndarray
     support_force: np.ndarray
     support_moment: np.ndarray
+    support_point: np.ndarray
     support_gap: float
     support_friction: float
     residual_force: np.ndarray
     residual_moment: np.ndarray
+    corners: Optional[SupportCorners] = None
 
     @classmethod
-    def of(cls, body, r, R, weight, forces, grips, support):
+    def of(cls, body, r, R, weight, forces, grips, corners):
         """From the pose ``(r, R)``, ``weight`` (3,), the rods' ``forces`` ``[(point, force on the
-        rod)]``, the closed ``grips`` and ``support`` ``(point, force, moment, gap, friction)`` or None."""
+        rod)]``, the closed ``grips`` and the support's :class:`SupportCorners` (or None)."""
         from .model.bodies import body_equilibrium
         r, R, weight = np.asarray(r, float).ravel(), np.asarray(R, float), np.asarray(weight, float).ravel()
         forces = [(np.asarray(point, float).ravel(), np.asarray(on_rod, float).ravel()) for point, on_rod in forces]
         zero = np.zeros(3)
         force, moment = body_equilibrium(r, zero, forces)            # what the grips put on it
-        point, reaction, couple, gap, friction = support if support is not None else (r, zero, zero, np.inf, 0.0)
-        reaction, couple = np.asarray(reaction, float), np.asarray(couple, float)
-        residual_force, residual_moment = body_equilibrium(r, weight, forces, (np.asarray(point, float), reaction,
-                                                                                couple))
-        return cls(body.name, r, R, grips, force, moment, weight, reaction, couple, float(gap), float(friction),
-                   residual_force, residual_moment)
+        support = [] if corners is None else list(zip(corners.positions, corners.forces))
+        residual_force, residual_moment = body_equilibrium(r, weight, forces, support)
+        if corners is None:
+            return cls(body.name, r, R, grips, force, moment, weight, zero, zero, r, np.inf, 0.0, residual_force,
+                       residual_moment)
+        point = corners.centre_of_pressure
+        reaction, couple = body_equilibrium(point, zero, [], support)
+        return cls(body.name, r, R, grips, force, moment, weight, reaction, couple, point,
+                   float(corners.gaps.min()), body.support_friction, residual_force, residual_moment, corners)
 
     @property
     def grip_force(self):
@@ -180,6 +245,20 @@ class BodyResult:
         return any(c.slipping for c in self.grips)
 
     @property
+    def support_needed_friction(self):
+        """The friction its support needs to hold it (:meth:`SupportCorners.needed_friction`)."""
+        return self.corners.needed_friction() if self.corners is not None else 0.0
+
+    @property
+    def support_slipping(self):
+        """It slides on its support: a pressed corner slides, or (sticking) the support needs
+        more friction than it has."""
+        if self.corners is None or not self.resting:
+            return False
+        return bool(np.any(self.corners.sliding & self.corners.pressed)) or \
+            self.support_needed_friction > self.support_friction
+
+    @property
     def resting(self):
         """True while its support pushes on it."""
         return bool(np.linalg.norm(self.support_force) > 1e-6 * max(np.linalg.norm(self.weight), 1e-300))
@@ -193,7 +272,10 @@ class BodyResult:
                 "slipping": self.slipping, "resting": self.resting,
                 "contact_force": self.contact_force.tolist(), "contact_moment": self.contact_moment.tolist(),
                 "weight": self.weight.tolist(), "support_force": self.support_force.tolist(),
-                "support_moment": self.support_moment.tolist(), "support_gap": self.support_gap,
+                "support_moment": self.support_moment.tolist(), "support_point": self.support_point.tolist(),
+                "support_gap": self.support_gap, "support_friction": self.support_friction,
+                "support_needed_friction": self.support_needed_friction, "support_slipping": self.support_slipping,
+                "support_corners": self.corners.as_list() if self.corners is not None else [],
                 "residual_force": self.residual_force.tolist(), "residual_moment": self.residual_moment.tolist()}
 
 

@@ -29,8 +29,8 @@ import numpy as np
 
 from ..model import boundary
 from ..model.compatibility import compatibility_residuals
-from ..model.bodies import (body_equilibrium, body_pose, body_scales, body_shape, grip_friction, support_equations,
-                             support_geometry, support_parameter)
+from ..model.bodies import (CONTACT_UNKNOWNS, CORNER_SIGNS, body_equilibrium, body_pose, body_scales, body_shape,
+                             corner_points, grip_friction, support_equations, support_parameter)
 from ..model.contact import contact_geometry, normal_contact, outline_size
 from ..model.loads import distributed_fields, is_active
 from ..model.rod import STATE_SIZE, rod_equations
@@ -123,22 +123,18 @@ class CollocationNLP:
             self._states.append(ca.diag(ca.DM(self.node_scale[m])) @ matrix)
 
     def _declare_bodies(self, blocks, scales, offset):
-        """The free bodies' unknowns (:mod:`tca_casadi.model.bodies`): per grip its normal force
-        and tangential force (3) [/F_s of its module]; per body its pose ``[delta (3) /L_o, g (3)]``
-        and, resting on a support, the support's force (3) [/f_o] and moment (3) [/(f_o L_o)].
-        Returns the next offset; ``body_index`` holds every index of these unknowns."""
+        """The free bodies' unknowns (:mod:`tca_casadi.model.bodies`): per grip its normal force,
+        tangential force (3) [/F_s of its module] and slip multiplier; per body its pose
+        ``[delta (3) /L_o, g (3)]`` and, on a support, per corner its normal force, tangential
+        force (3) [/f_o] and slip multiplier. Returns the next offset; ``body_index`` holds every
+        index of these unknowns."""
         robot, start = self.robot, offset
-        self._grip_forces, self._grip_tangents, self._poses, self._supports = [], [], [], []
+        self._grips, self._poses, self._supports = [], [], {}
         self.grip_index, self.pose_index, self.support_index = [], [], {}
         for c in robot.grips:
-            fs = robot.modules[c.module].force_scale
-            block = ca.MX.sym(f"grip_{c.index}", 4)
-            blocks.append(block)
-            scales.append(np.full(4, fs))
-            self.grip_index.append(offset + np.arange(4))
-            offset += 4
-            self._grip_forces.append(block[0] * fs)
-            self._grip_tangents.append(block[1:4] * fs)
+            block, offset = self._contact_block(f"grip_{c.index}", robot.modules[c.module].force_scale, blocks, scales,
+                                                offset, self.grip_index)
+            self._grips.append(block)
         self._body_shapes = []
         for body in robot.bodies:
             fo, lo = body_scales(body)
@@ -151,14 +147,25 @@ class CollocationNLP:
             self._poses.append(pose)
             self._body_shapes.append(body_shape(body, *body_pose(body, pose)))
             if body.support is not None:
-                block = ca.MX.sym(f"support_{body.name}", 6)
-                blocks.append(block)
-                scales.append(np.r_[np.full(3, fo), np.full(3, fo * lo)])
-                self.support_index[body.index] = offset + np.arange(6)
-                offset += 6
-                self._supports.append((body.index, block[0:3] * fo, block[3:6] * fo * lo))
+                corners, indices = [], []
+                for j in range(len(CORNER_SIGNS)):
+                    block, offset = self._contact_block(f"support_{body.name}_{j}", fo, blocks, scales, offset, indices)
+                    corners.append(block)
+                self._supports[body.index] = corners
+                self.support_index[body.index] = np.concatenate(indices)
         self.body_index = np.arange(start, offset)
         return offset
+
+    @staticmethod
+    def _contact_block(name, force_scale, blocks, scales, offset, index):
+        """One frictional contact's unknowns ``(f_n [N], f_t (3,) [N], lambda)``, appended to
+        ``blocks``/``scales`` (forces scaled by ``force_scale``) and their indices to ``index``;
+        returns them and the next offset."""
+        block = ca.MX.sym(name, CONTACT_UNKNOWNS)
+        blocks.append(block)
+        scales.append(np.r_[np.full(4, force_scale), 1.0])
+        index.append(offset + np.arange(CONTACT_UNKNOWNS))
+        return (block[0] * force_scale, block[1:4] * force_scale, block[4]), offset + CONTACT_UNKNOWNS
 
     @property
     def parameter_size(self):
@@ -176,8 +183,7 @@ class CollocationNLP:
         (:class:`~tca_casadi.model.contact.ContactModel`): the obstacle placed at the
         parameters, or (a grip) the body at its unknown pose, symbolic."""
         if contact.body is not None:
-            return (self._body_shapes[contact.body], self._grip_forces[contact.index],
-                    self._grip_tangents[contact.index])
+            return (self._body_shapes[contact.body],) + self._grips[contact.index][0:2]
         return self.robot.obstacle_of(contact.obstacle, self.param), self._contact_forces[contact.index], None
 
     def param(self, name):
@@ -371,37 +377,36 @@ class CollocationNLP:
         self._body_conditions()
 
     def _body_conditions(self):
-        """Per grip its normal complementarity and its three friction equations; per body its
-        six equilibrium equations and, on a support, the support's six
+        """Per grip its normal complementarity and its four friction equations; per body its
+        six equilibrium equations and, on a support, five per corner
         (:mod:`tca_casadi.model.bodies`)."""
         robot = self.robot
         on_body = [[] for _ in robot.bodies]
         poses = [(shape.position, shape.rotation) for shape in self._body_shapes]      # (r, R) of each body
         for c in robot.grips:
-            module = robot.modules[c.module]
+            module, body = robot.modules[c.module], robot.bodies[c.body]
             node = self._node_at[c.module][_breakpoint(self._node_at[c.module], c.s)]
             g, n, point = contact_geometry(self._body_shapes[c.body], module, node)
             fs, gs = module.force_scale, outline_size(module)
-            f, t = self._grip_forces[c.index], self._grip_tangents[c.index]
-            r, R = poses[c.body]
+            f, t, slip = self._grips[c.index]
             self._g.append(normal_contact(f, g, fs, gs))
-            self._g.append(grip_friction(point, n, r, R, self.param(robot.grip_parameter(c, "anchor")),
-                                         self.param(robot.grip_parameter(c, "sticks")), f, t, g, fs, gs))
+            self._g.append(grip_friction(point, n, *poses[c.body], self.param(robot.grip_parameter(c, "anchor")),
+                                         self.param(robot.grip_parameter(c, "sticks")), f, t, slip, g, fs, gs,
+                                         body.friction, body.sliding))
             on_body[c.body].append((point, f * n + t))
-        supports = {b: (force, moment) for b, force, moment in self._supports}
         for body in robot.bodies:
             fo, lo = body_scales(body)
             r, R = poses[body.index]
             weight = self.param(f"{body.name}.mass") * self.param("gravity")
-            support = None
-            if body.index in supports:
-                force, moment = supports[body.index]
+            support = []
+            if body.index in self._supports:
+                corners = self._supports[body.index]
                 plane = robot.obstacle_of(body.support, self.param)
-                _, _, point = support_geometry(plane, body, r, R)
-                support = (point, force, moment)
-                self._g.append(support_equations(plane, body, r, R, self.param(support_parameter(body.name, "anchor")),
-                                                 self.param(support_parameter(body.name, "sticks")), force, moment,
-                                                 fo))
+                anchors = [self.param(support_parameter(body.name, j, "anchor")) for j in range(len(corners))]
+                sticks = [self.param(support_parameter(body.name, j, "sticks")) for j in range(len(corners))]
+                self._g.append(support_equations(plane, body, r, R, anchors, sticks, corners))
+                n = plane.signed_distance(r)[1]
+                support = [(point, f * n + t) for point, (f, t, _) in zip(corner_points(body, r, R), corners)]
             force, moment = body_equilibrium(r, weight, on_body[body.index], support)
             self._g.append(ca.vertcat(force / fo, moment / (fo * lo)))
 

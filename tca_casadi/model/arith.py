@@ -22,6 +22,10 @@ def sin(x):
     return _casadi().sin(x) if is_casadi(x) else np.sin(x)
 
 
+def tanh(x):
+    return _casadi().tanh(x) if is_casadi(x) else np.tanh(x)
+
+
 def sqrt(x):
     return _casadi().sqrt(x) if is_casadi(x) else np.sqrt(x)
 

@@ -1,59 +1,82 @@
-"""Grasped objects as free rigid bodies, and sticking friction (issue 17; the derivation is
+"""Grasped objects as free rigid bodies, with friction (issue 17; the derivation is
 ``docs/contact.md`` sections 4 and 5). Written once, for numbers or CasADi symbols.
 
 A *body* is a scenario object with ``contact: true``: a box of edges ``size`` and mass ``m``
 whose pose is unknown, ``r = r0 + delta`` and ``R = R0 R(g)`` with ``r0, R0`` its placed pose
 and ``g`` (3,) a Gibbs vector (``q = [1, g / 2] / sqrt(1 + |g|^2 / 4)``, smooth everywhere, the
 rotation vector to first order, any turn below 180 deg). It is in equilibrium under its weight,
-the contact forces of the modules that may touch it (``held_by``) and the reaction of its
-``support`` (a plane obstacle it rests on):
+the contact forces of the modules that may touch it (``held_by``) and the reactions of its
+``support`` (a plane obstacle) at its corners::
 
-    sum_k (-f_k) + F_s + m g = 0,    sum_k (x_k - r) x (-f_k) + (x_s - r) x F_s + M_s = 0
+    sum_k (-f_k) + sum_j F_j + m g = 0,    sum_k (x_k - r) x (-f_k) + sum_j (y_j - r) x F_j = 0
 
-(``f_k`` the force on the rod at its outline point ``x_k``; ``x_s`` the box's lowest point).
+(``f_k`` the force on the rod at its outline point ``x_k``; ``F_j`` the support's force on the
+body at its corner ``y_j``).
 
-**A grip** (rod candidate against a body) carries a normal force (the complementarity of
-:mod:`.contact`) and a tangential force ``f_t`` (3,), with three equations that blend sticking
-with no friction by the side of the normal complementarity's corner::
+**Friction**, the same at every contact of a body (a grip: a rod candidate against it; a
+corner against its support). A contact carries a normal force ``f_n`` (the complementarity of
+:mod:`.contact`), a tangential force ``f_t`` (3,) and a slip multiplier ``lambda >= 0``, with
+three equations that blend friction with no friction by the side of the normal
+complementarity's corner, and one for ``lambda``::
 
-    c P (x - r - R X) / g_s + (1 - c) P f_t / f_s + n (n . f_t) / f_s = 0,
+    c [P u / g_s + (kappa + lambda) P f_t / f_s] + (1 - c) P f_t / f_s + n (n . f_t) / f_s = 0,
     c = sticks * step(f_n / f_s - g / g_s),   P = I - n n^T
 
-``X`` (3,) the anchor, the body-frame point the rod's outline point stuck to when the contact
-closed, and ``sticks`` (0 or 1) whether it had closed: both are parameters copied from the
-solution a solve starts from (the history a static solve needs). A closed, anchored contact
-sticks (its tangential force is whatever holds it there); an open one carries none; a contact
-that closes during a solve comes in frictionless and sticks from the next one. Friction's
-coefficient enters only the verdict: margin ``mu f_n - |f_t|``, slipping when negative.
+``u`` is how far the contact point moved since the solution the solve starts from: for a grip
+``x - r - R X``, ``X`` the body-frame point its rod's outline point was at there; for a corner
+``y - A``, ``A`` the point of the plane it pressed there. ``X``, ``A`` (anchors) and ``sticks``
+(0 or 1: the contact was closed there) are parameters copied from that solution and carried
+again after every continuation step (the history a static solve needs). So ``u = -(kappa +
+lambda) (g_s / f_s) f_t``: the contact point moves against its friction force or not at all;
+``kappa`` is an elastic compliance (0 for grips, whose rods are compliant;
+:data:`SUPPORT_COMPLIANCE` for corners, whose body is rigid: four corners on a plane are
+indeterminate without it) and ``lambda`` the slip. The law (``contact.friction_law``) says
+what fixes ``lambda``:
 
-**The support** (body against its plane) carries a force ``F_s`` and a moment ``M_s`` (3 each):
-the normal part of ``F_s`` by the complementarity with the gap of the box's lowest point; the
-rest, blended the same way, either welds the body to its anchor pose (``r_A``, ``g_A``: lying
-where it was put, or where it was at the solve it starts from) or carries nothing::
+- ``stick``: ``lambda = 0``. A closed, anchored contact sticks, its tangential force whatever
+  holds it there; the coefficient enters only the verdict: margin ``mu f_n - |f_t|``,
+  slipping when negative, with the friction it would need ``|f_t| / f_n``.
+- ``coulomb``: ``c FB(lambda, (mu f_n - |f_t|) / f_s) + (1 - c) lambda = 0``, the slip's
+  complementarity with the friction margin (the smoothed Fischer-Burmeister of
+  :mod:`.contact`): a contact sticks inside Coulomb's cone and slides on it, so a grasp whose
+  normal force falls lets go continuously (release) and an object too heavy for its grip slides
+  out of it. A contact on the sliding side is reported slipping. With ``mu = 0`` the contact is
+  frictionless (``f_t = 0``).
 
-    c P (r - r_A) / L_o + (1 - c) P F_s / f_o + n FB(n . F_s / f_o, g / L_o) = 0
-    c theta(R_A^T R) + (1 - c) M_s / (f_o L_o) = 0
+An open contact carries no tangential force; a contact that closes during a solve comes in
+frictionless and takes friction from the next continuation step.
 
-``f_o = m * 9.81 N/kg`` and ``L_o`` the largest edge are the body's scales, ``theta`` the
-(small) relative rotation ``vee(A - A^T) / 2``.
+**The support** acts at the box's eight corners ``y_j = r + R c_j``: each corner's normal force
+is complementary to its gap to the plane, with a normal compliance too, ``FB(f_n / f_o, g / L_o
++ kappa f_n / f_o)`` (a corner sinks ``kappa L_o`` per weight it carries). So a box lies on a
+face (four corners), an edge (two) or a corner (one), lands on an edge when put down tilted and
+rolls flat as it is pressed, and tips when its centre of pressure would leave its face: no
+contact patch is assumed. ``f_o = m * 9.81 N/kg`` and ``L_o`` the largest edge are the body's
+scales.
 """
 from dataclasses import dataclass
 
 import numpy as np
 
-from .arith import cross, is_casadi, sqrt
-from .obstacles import SMOOTHING, Box
+from .arith import cross, is_casadi, sqrt, tanh
+from .obstacles import Box
 
 # (casadi, and the modules that import it, are imported where used: ``validate`` declares the
 # history parameters through this module without loading any numerical library)
 
-#: width of the smooth step between sticking and no friction, on ``f / f_s - g / g_s``
+#: width of the smooth step between friction and no friction, on ``f / f_s - g / g_s``
 STICK_SMOOTHING = 1e-3
-#: the same for a support (a body lifted off its support lets go of it over this much of its
-#: weight: a weld released within microns of lift is a corner continuation cannot follow)
-SUPPORT_SMOOTHING = 1e-3
+#: smoothing of ``|f_t|`` on Coulomb's cone, as a fraction of the force scale
+CONE_SMOOTHING = 1e-9
+#: a corner's compliance against its support, normal and tangential: it gives by this fraction
+#: of the body's largest edge under the body's weight (12 nm for a 12 mm, 0.5 g bar)
+SUPPORT_COMPLIANCE = 1e-6
 #: standard gravity [m/s^2]: a body's force scale is its weight at it (whatever the scenario's g)
 STANDARD_GRAVITY = 9.81
+#: the corners of a box, as signs of its half-edges (8, 3)
+CORNER_SIGNS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
+#: unknowns per contact of a body: normal force, tangential force (3), slip multiplier
+CONTACT_UNKNOWNS = 5
 
 
 @dataclass(frozen=True)
@@ -62,7 +85,8 @@ class BodyModel:
     placed pose ``position`` (3,) [m] and ``rotation`` (3, 3), ``friction`` (between it and the
     rods), ``support`` (index into ``robot.obstacles`` of the plane it rests on, or None) and
     ``modules`` (indices of the modules that may touch it), ``mass`` [kg] as the scenario gives
-    it (its force scale; the weight itself is the parameter ``NAME.mass``)."""
+    it (its force scale; the weight itself is the parameter ``NAME.mass``),
+    ``support_friction`` (between it and its support)."""
     name: str
     index: int
     mass: float
@@ -72,10 +96,20 @@ class BodyModel:
     friction: float
     support: object
     modules: tuple
+    #: the friction law (``contact.friction_law``): False sticks whatever the force (the
+    #: verdict says when that needs more friction than the body has), True slides on
+    #: Coulomb's cone
+    sliding: bool = False
+    support_friction: float = 0.0
 
     @property
     def length_scale(self):
         return float(np.max(self.size))
+
+    @property
+    def corners(self):
+        """The box's corners in its own frame (8, 3) [m]."""
+        return CORNER_SIGNS * (np.asarray(self.size, float) / 2)
 
 
 def body_scales(body):
@@ -116,76 +150,97 @@ def body_shape(body, r, R):
 
 
 def smooth_step(z, width=STICK_SMOOTHING):
-    """0 for ``z << -width``, 1 for ``z >> width``, smooth between."""
-    return 0.5 * (1 + z / sqrt(z * z + width ** 2))
+    """0 for ``z << -width``, 1 for ``z >> width``, smooth between: ``(1 + tanh(z / width)) / 2``
+    (its tails fall off exponentially: a contact let go of leaves no tangential force)."""
+    return 0.5 * (1 + tanh(z / width))
 
 
-def _projector(n):
-    import casadi as ca
-    return ca.DM.eye(3) - n @ n.T
-
-
-def grip_friction(point, n, r, R, anchor, sticks, normal_force, tangential, gap, force_scale, gap_scale):
-    """The three scaled sticking / no-friction equations of one grip (module docstring)."""
-    c = sticks * smooth_step(normal_force / force_scale - gap / gap_scale)
-    P = _projector(n)
-    slip = P @ (point - r - R @ anchor)
-    import casadi as ca
-    return c * slip / gap_scale + (1 - c) * (P @ tangential) / force_scale + n * ca.dot(n, tangential) / force_scale
-
-
-def support_geometry(plane, body, r, R):
-    """``(g, n, x_s)``: the gap [m] between the box's lowest point and the support ``plane``
-    (outward normal ``n``), and that point (the centre of a face lying flat on it; the smoothed
-    ``|.|`` and sign of :mod:`.obstacles`)."""
-    distance, n = plane.signed_distance(r)
-    half = np.asarray(body.size, float) / 2
-    symbolic = is_casadi(r) or is_casadi(R)
-    reach, point = 0, r
-    for k in range(3):
-        axis = R[:, k]
-        along = (axis.T @ n) if symbolic else float(axis @ n)
-        smooth = sqrt(along * along + SMOOTHING ** 2)
-        reach = reach + half[k] * (smooth - SMOOTHING)
-        point = point - half[k] * (along / smooth) * axis
-    return distance - reach, n, point
-
-
-def relative_rotation(R_anchor, R):
-    """``vee(A - A^T) / 2`` of ``A = R_anchor^T R``: the relative rotation vector to first order."""
-    A = R_anchor.T @ R
-    import casadi as ca
-    return 0.5 * ca.vertcat(A[2, 1] - A[1, 2], A[0, 2] - A[2, 0], A[1, 0] - A[0, 1])
-
-
-def support_equations(plane, body, r, R, anchor_pose, sticks, force, moment, force_scale):
-    """The six scaled support equations (module docstring): ``force``, ``moment`` (3,) the
-    support's reaction on the body at its lowest point [N, N m]."""
+def friction_equations(moved, n, sticks, normal_force, tangential, slip, gap, force_scale, gap_scale, friction,
+                       sliding, compliance=0.0):
+    """The four scaled friction equations of one contact (module docstring): three on the
+    tangential force ``tangential`` (3,) [N], one on the slip multiplier ``slip``
+    (dimensionless). ``moved`` (3,) [m] how far the contact point moved since its anchor,
+    ``friction`` Coulomb's coefficient, ``sliding`` the law, ``compliance`` ``kappa``."""
     import casadi as ca
     from .contact import normal_contact
-    length = body.length_scale
-    g, n, _ = support_geometry(plane, body, r, R)
-    r_anchor, R_anchor = body_pose(body, anchor_pose)
-    f_n = ca.dot(n, force)
-    c = sticks * smooth_step(f_n / force_scale - g / length, SUPPORT_SMOOTHING)
-    P = _projector(n)
-    position = c * (P @ (r - r_anchor)) / length + (1 - c) * (P @ force) / force_scale + \
-        n * normal_contact(f_n, g, force_scale, length)
-    turn = c * relative_rotation(R_anchor, R) + (1 - c) * moment / (force_scale * length)
-    return ca.vertcat(position, turn)
+    P = ca.DM.eye(3) - n @ n.T
+    along = P @ tangential
+    normal_part = n * ca.dot(n, tangential) / force_scale
+    if sliding and friction <= 0:                       # Coulomb with no friction: frictionless
+        return ca.vertcat(along / force_scale + normal_part, slip)
+    c = sticks * smooth_step(normal_force / force_scale - gap / gap_scale)
+    tangent = c * (P @ moved / gap_scale + (compliance + slip) * along / force_scale) + \
+        (1 - c) * along / force_scale + normal_part
+    if not sliding:
+        return ca.vertcat(tangent, slip)
+    margin = friction * normal_force - sqrt(ca.dot(along, along) + (CONE_SMOOTHING * force_scale) ** 2)
+    return ca.vertcat(tangent, c * normal_contact(slip * force_scale, margin, force_scale, force_scale) + (1 - c) * slip)
 
 
-def body_equilibrium(r, weight, grips, support=None):
+def grip_friction(point, n, r, R, anchor, sticks, normal_force, tangential, slip, gap, force_scale, gap_scale,
+                  friction=0.0, sliding=False):
+    """The four friction equations of one grip: ``point`` the rod's outline point, ``(r, R)``
+    the body's pose, ``anchor`` (3,) the body-frame point it was at."""
+    return friction_equations(point - r - R @ anchor, n, sticks, normal_force, tangential, slip, gap, force_scale,
+                              gap_scale, friction, sliding)
+
+
+def slides(slip, margin, force_scale):
+    """True on the sliding side of a contact's slip complementarity's corner (``slip`` its
+    multiplier, ``margin`` [N] its friction margin)."""
+    return float(slip) > float(margin) / force_scale
+
+
+def corner_points(body, r, R):
+    """The box's corners at pose ``(r, R)``: a list of eight (3,) points [m] (numbers or
+    CasADi)."""
+    if is_casadi(r) or is_casadi(R):
+        import casadi as ca
+        return [r + R @ ca.DM(corner) for corner in body.corners]
+    return [np.asarray(r, float).ravel() + np.asarray(R, float) @ corner for corner in body.corners]
+
+
+def placed_corners(body):
+    """The corners at the body's placed pose (8, 3) [m]: where the support anchors are measured from."""
+    return np.array(corner_points(body, body.position, body.rotation))
+
+
+def support_gaps(plane, body, r, R):
+    """``(gaps, n)``: each corner's distance above the support ``plane`` [m] (8 numbers or
+    symbols) and the plane's outward normal."""
+    found = [plane.signed_distance(point) for point in corner_points(body, r, R)]
+    return [g for g, _ in found], found[0][1]
+
+
+def support_equations(plane, body, r, R, anchors, sticks, corner_unknowns):
+    """The support's scaled equations, five per corner (normal complementarity with its
+    compliance, then :func:`friction_equations`): ``anchors`` (8, 3) how far each corner's
+    anchor lies from its placed position [m], ``sticks`` (8,), ``corner_unknowns`` per corner
+    ``(f_n [N], f_t (3,) [N], lambda)``."""
+    import casadi as ca
+    from .contact import normal_contact
+    fo, lo = body_scales(body)
+    gaps, n = support_gaps(plane, body, r, R)
+    out = []
+    for j, (point, g, (f, t, slip)) in enumerate(zip(corner_points(body, r, R), gaps, corner_unknowns)):
+        out.append(normal_contact(f, g + SUPPORT_COMPLIANCE * lo * f / fo, fo, lo))
+        moved = point - ca.DM(placed_corners(body)[j]) - anchors[j]
+        out.append(friction_equations(moved, n, sticks[j], f, t, slip, g, fo, lo, body.support_friction,
+                                      body.sliding, SUPPORT_COMPLIANCE))
+    return ca.vertcat(*out)
+
+
+def body_equilibrium(r, weight, grips, support=()):
     """``[force (3); moment about r (3)]`` [N, N m] on a body: its ``weight`` (3,) at ``r``, each
-    grip ``(point, force on the rod)`` reacted on it, the support ``(point, force, moment)``."""
+    grip ``(point, force on the rod)`` reacted on it, each support force ``(point, force on the
+    body)``."""
     force, moment = weight, 0 * weight
     for point, on_rod in grips:
         force = force - on_rod
         moment = moment - cross(point - r, on_rod)
-    if support is not None:
-        point, reaction, couple = support
+    for point, reaction in support:
         force = force + reaction
-        moment = moment + cross(point - r, reaction) + couple
+        moment = moment + cross(point - r, reaction)
     return force, moment
 
 
@@ -224,9 +279,10 @@ def grip_parameter(body, module, number, key):
     return f"objects.{body}.grip.{module}.{number}.{key}"
 
 
-def support_parameter(body, key):
-    """The name of a body's support history parameter ``key`` (``anchor`` or ``sticks``)."""
-    return f"objects.{body}.support.{key}"
+def support_parameter(body, corner, key):
+    """The name of a body's support history parameter ``key`` (``anchor`` or ``sticks``) of its
+    ``corner`` (0-7, :data:`CORNER_SIGNS`)."""
+    return f"objects.{body}.support.{corner}.{key}"
 
 
 #: the first element of a history parameter's ``source`` (it is no scenario key)
@@ -235,8 +291,9 @@ HISTORY = "history"
 
 def history_names(scenario):
     """The history parameters of the contact objects, ``[(name, size), ...]`` (module
-    docstring): per grip ``objects.NAME.grip.MODULE.K.anchor`` (3) and ``.sticks``; per
-    supported body ``objects.NAME.support.anchor`` (6: offset, Gibbs vector) and ``.sticks``."""
+    docstring): per grip ``objects.NAME.grip.MODULE.K.anchor`` (3) and ``.sticks``; per corner
+    ``J`` of a supported body ``objects.NAME.support.J.anchor`` (3: where on the plane it is
+    anchored, from its placed position) and ``.sticks``."""
     bodies = contact_objects(scenario)
     out = []
     for b, m, K, _ in grip_points(scenario):
@@ -244,23 +301,16 @@ def history_names(scenario):
                 for key, size in (("anchor", 3), ("sticks", 1))]
     for _, item in bodies:
         if item.support is not None:
-            out += [(support_parameter(item.name, "anchor"), 6), (support_parameter(item.name, "sticks"), 1)]
+            out += [(support_parameter(item.name, j, key), size) for j in range(len(CORNER_SIGNS))
+                    for key, size in (("anchor", 3), ("sticks", 1))]
     return out
-
-
-def gibbs_of(R):
-    """The Gibbs vector (3,) of a rotation matrix (numpy): ``2 q_v / q_w``."""
-    from .rotations import matrix_to_quaternion
-    q = np.asarray(matrix_to_quaternion(np.asarray(R, float)), float).ravel()
-    q = q if q[0] >= 0 else -q
-    return 2 * q[1:4] / q[0]
 
 
 def carried_history(robot, params, solution):
     """``params`` with the contact objects' history set from ``solution`` (the state a solve
     starts from; None: a cold start, the scenario's history): each grip closed there is
     anchored where its rod point touched the body (in the body's frame) and sticks, an open one
-    does not; a body resting on its support there is anchored at its pose there."""
+    does not; so does each corner pressed on its support there, anchored where it pressed."""
     params = np.array(params, float)
     if not robot.bodies:
         return params
@@ -282,12 +332,13 @@ def carried_history(robot, params, solution):
                                                                           closed.position)
     for body in robot.bodies:
         found = results.get(body.name)
-        if body.support is None or found is None:
+        if body.support is None or found is None or found.corners is None:
             continue
-        params[layout[support_parameter(body.name, "sticks")]] = 1.0 if found.resting else 0.0
-        if found.resting:
-            params[layout[support_parameter(body.name, "anchor")]] = np.r_[found.position - body.position,
-                                                      gibbs_of(body.rotation.T @ found.rotation)]
+        pressed = found.corners.pressed
+        for j, origin in enumerate(placed_corners(body)):
+            params[layout[support_parameter(body.name, j, "sticks")]] = float(pressed[j])
+            if pressed[j]:
+                params[layout[support_parameter(body.name, j, "anchor")]] = found.corners.positions[j] - origin
     return params
 
 

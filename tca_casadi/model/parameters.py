@@ -162,7 +162,9 @@ def declare(scenario, actuators, point_loads, distributed):
             put(f"{item.name}.held", float(item.held), "dimensionless", ("objects", k, "held"), 0.0)
     from .bodies import HISTORY, history_names
     for name, size in history_names(scenario):      # set from the solution a solve starts from
-        sticks = name.endswith(".support.sticks")   # placed resting on its support; no grip yet
+        # placed on its support: every corner sticks where it is (one above the plane is open,
+        # its sticking idle); no grip yet
+        sticks = ".support." in name
         put(name, np.full(size, float(sticks)) if name.endswith("sticks") else np.zeros(size), "dimensionless",
             (HISTORY,) + tuple(name.split(".")))
     for k, obstacle in enumerate(scenario.obstacles):      # moved without a rebuild (a grasp, a study)

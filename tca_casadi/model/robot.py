@@ -576,7 +576,10 @@ def _bodies(scenario, obstacles):
         holders = tuple(m for m, module in enumerate(scenario.modules) if module.name in item.held_by)
         bodies.append(BodyModel(item.name, b, float(item.mass), np.asarray(item.size, float), np.asarray(item.position, float),
                                 rotation, float(item.friction),
-                                names.index(item.support) if item.support is not None else None, holders))
+                                names.index(item.support) if item.support is not None else None, holders,
+                                sliding=scenario.contact.friction_law == "coulomb",
+                                support_friction=float(item.friction if item.support_friction is None
+                                                       else item.support_friction)))
     grips = [ContactModel(m, s, None, k, body=b, number=K) for k, (b, m, K, s) in enumerate(grip_points(scenario))]
     return bodies, grips
 
@@ -591,12 +594,12 @@ def _check_clear(robot, values):
     from ..errors import ScenarioError
     from ..solvers.guess import reference_chain
     from .contact import gaps, outline_of
-    from .bodies import body_shape, support_geometry
+    from .bodies import body_shape, support_gaps
     samples = [np.linspace(0.0, module.length, CLEAR_SAMPLES) for module in robot.modules]
     placed = [body_shape(body, body.position, body.rotation) for body in robot.bodies]
     for body in robot.bodies:
         if body.support is not None:
-            g, _, _ = support_geometry(robot.obstacles[body.support], body, body.position, body.rotation)
+            g = min(support_gaps(robot.obstacles[body.support], body, body.position, body.rotation)[0])
             if abs(g) > 1e-9:
                 raise ScenarioError(
                     f"objects[{body.name}]: {'lies' if g > 0 else 'cuts'} {abs(g) * 1e3:.4g} mm "

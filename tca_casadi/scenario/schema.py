@@ -461,8 +461,9 @@ class GraspedObject(Strict):
     ``yaw`` about the global z axis) until ``held`` is set; while held, its weight hangs from the
     tips of the ``held_by`` modules in equal shares and it moves with them. With ``contact: true``
     it is a free rigid body instead (``docs/contact.md`` section 5): resting on the plane obstacle
-    ``support``, touched by the ``held_by`` modules (``friction`` between them and it), held only
-    by the contact forces."""
+    ``support``, touched by the ``held_by`` modules (``friction`` between them and it;
+    ``support_friction`` between it and its support, by default ``friction``), held only by the
+    contact forces."""
     name: str = Field(min_length=1)
     mass: NonNegativeMass
     size: Vector3Length
@@ -475,6 +476,7 @@ class GraspedObject(Strict):
     contact: bool = False
     support: Optional[str] = None
     friction: Annotated[float, _quantity("dimensionless"), Field(ge=0)] = 0.0
+    support_friction: Optional[Annotated[float, _quantity("dimensionless"), Field(ge=0)]] = None
 
     _positive_size = model_validator(mode="after")(lambda self: _positive_edges(self))
 
@@ -553,11 +555,15 @@ class ContactOptions(Strict):
     spaced points inside it and the arc lengths ``at`` lists per module (``{MODULE: [s, ...]}``)
     are contact candidates against every obstacle; after a solve, the gap is sampled finely and
     a candidate is added where the body still penetrates by more than ``tolerance``, up to
-    ``localise`` times."""
+    ``localise`` times. ``friction_law``: how the grips of contact objects hold (``stick``: they
+    stick whatever it takes, and a grasp needing more friction than it has is reported slipping
+    with the friction it would need; ``coulomb``: they slide on Coulomb's cone, so a grasp can
+    let go and an object can slide out of it)."""
     points: int = Field(default=8, ge=0, le=200)
     at: dict[str, list[Annotated[float, _quantity("length"), Field(ge=0)]]] = Field(default_factory=dict)
     tolerance: Annotated[float, _quantity("length"), Field(gt=0)] = 1e-8
     localise: int = Field(default=8, ge=0, le=50)
+    friction_law: Literal["stick", "coulomb"] = "stick"
 
 
 # ----------------------------------------------------------------------------- solver

@@ -135,10 +135,11 @@ def body_results(robot, params, module_data, values):
     """``(grips, loads, bodies, warnings, pattern)`` of a solution with free bodies
     (:mod:`tca_casadi.model.bodies`): the :class:`ContactResult` of every closed grip, their
     forces on each module ``{m: (points, forces)}`` for the global balance, one
-    :class:`BodyResult` per body, a ``slipping`` warning for each grip that needs more friction
-    than it has, and each grip's and support's side of its complementarity's corner.
-    ``values``: ``{"grips": [(f_n, f_t (3)), ...], "poses": [(6,), ...], "supports": {b: (6,)}}`` [SI]."""
-    from ..model.bodies import body_pose, body_scales, body_shape, support_geometry
+    :class:`BodyResult` per body, a ``slipping`` warning for each grip (or support) that needs
+    more friction than it has or slides, and each grip's and support corner's side of its
+    complementarities' corners. ``values``: ``{"grips": [(f_n, f_t (3), slip multiplier), ...],
+    "poses": [(6,), ...], "supports": {b: (8 x 5,)}}`` [SI]."""
+    from ..model.bodies import body_pose, body_shape, slides
     from ..solution import BodyResult
     param = robot.param_function(params)
     closed, loads, warnings, pattern = [], {}, [], []
@@ -150,35 +151,104 @@ def body_results(robot, params, module_data, values):
         s, states = module_data[c.module][0], module_data[c.module][1]
         g, n, point = contact_geometry(shapes[c.body], module, states[:, int(np.argmin(np.abs(s - c.s)))])
         grip = np.asarray(values["grips"][c.index], float)
-        force, tangential = float(grip[0]), grip[1:4]
+        force, tangential, multiplier = float(grip[0]), grip[1:4], float(grip[4])
         pattern.append(force / module.force_scale > float(g) / outline_size(module))
         on_rod = force * n + tangential
         points, pushes = loads.setdefault(c.module, ([], []))
         points.append(point)
         pushes.append(on_rod)
         on_body[c.body].append((point, on_rod))
+        margin = body.friction * force - float(np.linalg.norm(tangential))
+        sliding = body.sliding and body.friction > 0 and slides(multiplier, margin, module.force_scale)
+        if body.sliding:
+            pattern.append(sliding)
         if force > CLOSED * module.force_scale:
+            slip = multiplier * outline_size(module) / module.force_scale * float(np.linalg.norm(tangential))
             result = ContactResult(module.name, float(c.s), body.name, point, n, force, tangential, float(g),
-                                   body.friction)
+                                   body.friction, sliding=sliding, slip=slip if sliding else 0.0)
             closed.append(result)
-            if result.friction_margin < 0:
-                warnings.append(PhysicsWarning(
-                    "slipping", f"object {body.name!r} slips at module {module.name} (s = {c.s * 1e3:.4g} mm): the "
-                    f"grasp needs friction {result.needed_friction:.3g} there and has {body.friction:.3g}"))
+            if result.slipping:
+                warnings.append(PhysicsWarning("slipping", _slipping_message(body, module, c.s, result)))
+    loads = {m: (np.array(p).T, np.array(f).T) for m, (p, f) in loads.items()}
     bodies = []
     for body, (r, R), forces in zip(robot.bodies, placed, on_body):
-        support = values["supports"].get(body.index)
-        plane = robot.obstacle_of(body.support, param) if body.support is not None else None
-        if plane is not None:
-            g, normal, point = support_geometry(plane, body, r, R)
-            weight_scale, length_scale = body_scales(body)
-            pattern.append(float(np.dot(normal, support[0:3])) / weight_scale > float(g) / length_scale)
+        corners = None
+        if body.index in values["supports"]:
+            corners, corner_pattern = _support_corners(robot, body, r, R, values["supports"][body.index], param)
+            pattern.extend(corner_pattern)
         weight = float(param(f"{body.name}.mass")[0]) * param("gravity")
-        bodies.append(BodyResult.of(body, r, R, weight, forces, [c for c in closed if c.obstacle == body.name],
-                                    None if plane is None else (np.asarray(point, float).ravel(), support[0:3],
-                                                                support[3:6], float(g), plane.friction)))
-    loads = {m: (np.array(p).T, np.array(f).T) for m, (p, f) in loads.items()}
+        result = BodyResult.of(body, r, R, weight, forces, [c for c in closed if c.obstacle == body.name], corners)
+        if result.support_slipping:
+            warnings.append(PhysicsWarning("slipping", _support_message(body, result)))
+        bodies.append(result)
     return closed, loads, bodies, warnings, tuple(pattern)
+
+
+def _support_corners(robot, body, r, R, unknowns, param):
+    """``(SupportCorners, pattern)`` of a body's support from its corners' unknowns (8 x 5,)
+    [SI]; the pattern says per corner which side of its normal (and, Coulomb, its slip)
+    complementarity's corner it is on."""
+    from ..model.bodies import CONTACT_UNKNOWNS, body_scales, corner_points, slides, support_gaps
+    from ..solution import SupportCorners
+    plane = robot.obstacle_of(body.support, param)
+    fo, lo = body_scales(body)
+    rows = np.asarray(unknowns, float).reshape(-1, CONTACT_UNKNOWNS)
+    gaps, n = support_gaps(plane, body, r, R)
+    gaps, n = np.array([float(g) for g in gaps]), np.asarray(n, float).ravel()
+    margins = body.support_friction * rows[:, 0] - np.linalg.norm(rows[:, 1:4], axis=1)
+    sliding = np.array([body.sliding and body.support_friction > 0 and slides(lam, margin, fo)
+                        for lam, margin in zip(rows[:, 4], margins)], bool)
+    pattern = [bool(f / fo > g / lo) for f, g in zip(rows[:, 0], gaps)]
+    if body.sliding:
+        pattern += [bool(s) for s in sliding]
+    corners = SupportCorners(np.array(corner_points(body, r, R), float), rows[:, 0].copy(), rows[:, 1:4].copy(), gaps,
+                             sliding, n, fo)
+    return corners, pattern
+
+
+def _support_message(body, result):
+    """What a ``slipping`` warning says of a body sliding on its support."""
+    if np.any(result.corners.sliding & result.corners.pressed):
+        return f"object {body.name!r} slides on its support on its friction limit ({body.support_friction:.3g})"
+    return (f"object {body.name!r} slips on its support: it needs friction {result.support_needed_friction:.3g} "
+            f"there and has {body.support_friction:.3g}")
+
+
+def record_slides(robot, start, solution):
+    """Mark in ``solution`` how far each closed grip's rod point moved over its body since the
+    state the solve started from (``start``: the parameters it started at, whose history says
+    which grips stuck where; :attr:`ContactResult.slid`), with a ``slipping`` warning for a grip
+    that slid and is no longer sliding (one still sliding has its warning). Only Coulomb grips
+    slide (a sticking grip's point stays on its anchor). Returns ``solution``."""
+    if not robot.bodies or not solution.bodies or len(start) != robot.layout.size:
+        return solution
+    layout, found = robot.layout, {body.name: body for body in solution.bodies}
+    for c in robot.grips:
+        body, module = robot.bodies[c.body], robot.modules[c.module]
+        result = found.get(body.name)
+        if not body.sliding or result is None or start[layout[robot.grip_parameter(c, "sticks")]][0] < 0.5:
+            continue
+        grip = next((g for g in result.grips if g.module == module.name and abs(g.s - c.s) <= 1e-12 * module.length),
+                    None)
+        if grip is None:
+            continue
+        anchor = np.asarray(start[layout[robot.grip_parameter(c, "anchor")]], float)
+        moved = np.asarray(grip.position, float) - (result.position + result.rotation @ anchor)
+        moved = moved - np.dot(moved, grip.normal) * np.asarray(grip.normal, float)
+        grip.slid = float(np.linalg.norm(moved))
+        if grip.slipping and not grip.sliding and grip.friction_margin >= 0:
+            solution.warnings.append(PhysicsWarning(
+                "slipping", f"object {body.name!r} slipped at module {module.name} (s = {c.s * 1e3:.4g} mm): the grip "
+                f"slid {grip.slid * 1e3:.4g} mm over it during this solve, on its friction limit ({body.friction:.3g})"))
+    return solution
+
+
+def _slipping_message(body, module, s, grip):
+    """What a slipping grip's warning says: it slides (Coulomb), or the friction it would need."""
+    where = f"object {body.name!r} slips at module {module.name} (s = {s * 1e3:.4g} mm): "
+    if grip.sliding:
+        return where + f"the grip slides {grip.slip * 1e6:.3g} um over it on its friction limit ({body.friction:.3g})"
+    return where + f"the grasp needs friction {grip.needed_friction:.3g} there and has {body.friction:.3g}"
 
 
 def _nearest_node(robot, shape, module_data):

@@ -38,12 +38,19 @@ class StepFailure:
     trial: object
     jump: float               # the last trial's inconsistency (inf: it did not converge)
     crossed: bool = False     # det J_w changed sign: a fold or bifurcation, or another branch
+    dropped: tuple = ()       # contact objects that jump within the step (a grasp lets go of them)
+    moved: float = 0.0        # how far the farthest of them jumps [m]
 
 
 #: a change of the state below this fraction of its size is the solver's noise
 NOISE = 1e-9
 #: the trapezoid test's error is relative to at least this fraction of the state's size
 SMALL_STEP = 1e-5
+#: a contact object moving more than this fraction of its largest edge within one step, off
+#: the trapezoidal rule on its tangents (:data:`DROP_INCONSISTENCY`), jumps: a grasp let go of
+#: it (it would fall) or it snapped to another equilibrium
+DROP = 0.05
+DROP_INCONSISTENCY = 0.5
 
 
 class BranchFollower:
@@ -85,11 +92,12 @@ class BranchFollower:
 
     def step(self, current, lam):
         """Newton from the tangent predictor at ``lam`` (IPOPT, warm-started, if Newton fails
-        on a small step)."""
+        on a small step; not with contact objects, where a failed small step is a grasp giving
+        or a box tipping, which IPOPT does not mend: a stall there took 45 s instead of 2)."""
         predicted = current.w + (lam - current.lam) * current.w_rate
         lu = current.linearisation.lu if current.linearisation is not None else None
         trial = self.solver.solve_newton(self.params_at(lam), predicted, lu=lu)
-        if not trial.converged and lam - current.lam <= self.IPOPT_STEP + 1e-12:
+        if not trial.converged and lam - current.lam <= self.IPOPT_STEP + 1e-12 and not self._history.size:
             trial = self.solver.solve_ipopt(self.params_at(lam), current.solution)
         self.iterations += trial.iterations
         return trial
@@ -102,6 +110,24 @@ class BranchFollower:
         if step <= self.CORNER_STEP:
             return 0.0
         return np.inf if corner else jump
+
+    def _dropped(self, a, b):
+        """``(names, moved [m])`` of the contact objects whose position jumps between the
+        points ``a`` and ``b``: by more than :data:`DROP` of their size and off the trapezoidal
+        rule on their tangents (a kink where a grip or the support closes or opens moves them
+        little over a small step; a grasp letting go moves them by their fall however small)."""
+        names, moved = [], 0.0
+        for body, index in zip(self.solver.robot.bodies, self.solver.nlp.pose_index):
+            position = index[0:3]                          # scaled by the body's largest edge
+            change = b.w[position] - a.w[position]
+            size = float(np.max(np.abs(change)))
+            if size <= DROP:
+                continue
+            error = change - 0.5 * (b.lam - a.lam) * (a.w_rate[position] + b.w_rate[position])
+            if float(np.max(np.abs(error))) > DROP_INCONSISTENCY * size:
+                names.append(body.name)
+                moved = max(moved, float(np.linalg.norm(change)) * body.length_scale)
+        return tuple(names), moved
 
     def _stick(self, lam, trial, candidate):
         """The accepted point with the history carried from it (the grips closed there are
@@ -150,8 +176,11 @@ class BranchFollower:
                 corner = _slack_pattern(current.solution) != _slack_pattern(trial)
                 jump = 0.0 if corner else self.inconsistency(current, candidate)
                 crossed = not corner and candidate.det_sign * current.det_sign < 0
+                dropped, moved = (), 0.0
                 if self._history.size:       # contact objects
                     jump = self._grasp_jump(corner, lam - current.lam, jump)
+                    dropped, moved = self._dropped(current, candidate)
+                    jump = np.inf if dropped else jump
                 if jump <= self.jump_tolerance and not crossed:
                     if self._history.size:
                         candidate = self._stick(lam, trial, candidate)
@@ -160,7 +189,8 @@ class BranchFollower:
                     continue
             step /= 2
             if step < min_step:
-                return current, step, substeps, StepFailure(trial, jump, crossed)
+                return current, step, substeps, (StepFailure(trial, jump, crossed, dropped, moved) if trial.converged
+                                                 else StepFailure(trial, jump, crossed))
         return current, step, substeps, None
 
 

@@ -16,6 +16,7 @@ from ..simulation import _failure_text
 from ..solvers.continuation import BranchFollower
 from .compare import compare_solutions
 from ..model.bodies import carried_history
+from ..solvers.assemble import record_slides
 from .objects import ObjectTracker
 from .sweep_result import bending_angle
 
@@ -216,10 +217,12 @@ def _solve_step(sim, before, previous, frames):
             # a grasp's state depends on its path (friction): a solve from the reference state
             # would teleport the objects; the step is reported stalled where it stopped
             return sim._stalled(solver, point.solution, before, sim.params, point.lam, 1e-4,
-                                _failure_text(failure), follower.iterations, 0.0), transition
+                                _failure_text(failure), follower.iterations, 0.0,
+                                origin="the previous step"), transition
         if failure is not None:
             solution = sim.solve(method="collocation", warn=False)            # from the reference state
             return solution, transition
         transition.append((float(target), point.solution))
+    record_slides(sim.robot, before, point.solution)
     sim.last = point.solution
     return point.solution, transition[:-1] if frames else []

@@ -6,6 +6,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from tca_casadi.errors import ScenarioError
+from tca_casadi.model.bodies import SUPPORT_COMPLIANCE
 from tca_casadi.simulation import Simulation
 
 PINCH = "scenarios/analytic/free_pinch.yaml"
@@ -39,17 +40,30 @@ def test_resting_then_squeezed_block_is_held_by_its_table(lifted):
     for solution in (rest, squeezed):
         assert solution.converged
         block = solution.bodies[0]
-        assert_allclose(block.support_force, [0, 0, weight], rtol=0, atol=1e-12)
-        assert_allclose(block.position, [0, 0, -0.038], rtol=0, atol=1e-11)   # |.| smoothing: 4.5e-12 m
+        lifted_by_grips = -sum(c.tangential_force[2] for c in block.grips)      # on the block
+        assert_allclose(block.support_force, [0, 0, weight - lifted_by_grips], rtol=0, atol=1e-12)
+        # four corners on the table, each carrying a quarter of what it carries and sinking by
+        # the support's compliance under it (kappa L_o per weight: 2.25e-9 m at rest)
+        pressed = block.corners.pressed
+        assert pressed.sum() == 4 and np.all(block.corners.positions[pressed, 2] < block.position[2])
+        assert_allclose(block.corners.normal_forces[pressed], block.support_force[2] / 4, rtol=0, atol=1e-13)
+        sink = SUPPORT_COMPLIANCE * 0.009 * block.support_force[2] / (4 * weight)
+        assert_allclose(block.position, [0, 0, -0.038 - sink], rtol=0, atol=1e-12)
+        assert_allclose(block.residual_force, 0, rtol=0, atol=1e-13)
+    assert rest.bodies[0].support_force[2] == pytest.approx(weight, abs=1e-15)
     grips = squeezed.bodies[0].grips
     assert len(grips) == 2 and all(c.s == pytest.approx(0.03) for c in grips)
     # a cantilever's tip pushed by P across a gap d: N = P - 3 E I d / L^3 (d = 0.5 mm), the
-    # small-deflection, shear-free estimate (measured 2e-3 of N off: 0.7 % of the spring part)
+    # small-deflection, shear-free, frictionless estimate (measured 2e-3 of N off)
     EI = 10e6 * np.pi * 0.002 ** 4 / 64
     expected = SQUEEZE - 3 * EI * 0.5e-3 / 0.03 ** 3
+    left, right = grips
     for c in grips:
         assert c.normal_force == pytest.approx(expected, rel=5e-3)
-        assert_allclose(c.tangential_force, 0, rtol=0, atol=1e-15)     # closed in this solve: no history
+    # the grips close on the way and stick from there: squeezed further, the fingertips turn
+    # and their friction carries a little of the block (3.7 %), equally on both sides
+    assert left.tangential_force[2] == pytest.approx(right.tangential_force[2], rel=1e-6)
+    assert 0 < -left.tangential_force[2] < 0.1 * weight and not squeezed.bodies[0].slipping
 
 
 def test_lifted_block_hangs_on_friction_half_its_weight_per_finger(lifted):
@@ -134,16 +148,19 @@ def test_bad_contact_objects(change, message):
 
 def test_physical_pick_and_place():
     """scenarios/arm_pick_and_place_contact.yaml: both fingertips press on the bar, its weight
-    reaches the arm only through them (friction), it rises with the arm and turns with it."""
+    reaches the arm only through them (friction), it rises with the arm and turns with it; the
+    bent arm puts it down (it lands and lies flat on the table, four corners pressed), the
+    gripper opens and lets go of it, and it stays where it was put when the arm rises."""
     from tca_casadi.studies.sequence import run_sequence
     sim = Simulation.from_file("scenarios/arm_pick_and_place_contact.yaml")
     result = run_sequence(sim)
     assert result.converged
-    names = result.names
-    closing, lifting, turning = (result.solutions[names.index(n)] for n in
-                                 ("gripper closes on the bar", "arm lifts the bar", "twisting module cools back"))
+    step = dict(zip(result.names, result.solutions))
+    closing, lifting, turning, bent, down, released, clear = (step[n] for n in (
+        "gripper closes on the bar", "arm lifts the bar", "twisting module cools back", "bending module bends to +x",
+        "arm puts the bar down", "gripper opens: released", "arm rises clear"))
     weight = 0.5e-3 * 9.81
-    for solution in (lifting, turning):
+    for solution in (lifting, turning, bent):
         bar = solution.bodies[0]
         assert {c.module for c in bar.grips} == {"finger_a", "finger_b"}
         assert all(c.normal_force > 1e-3 for c in bar.grips)
@@ -155,6 +172,19 @@ def test_physical_pick_and_place():
     assert lifting.bodies[0].position[2] - closing.bodies[0].position[2] > 8e-3
     x_axis = turning.bodies[0].rotation[:, 0]
     assert abs(x_axis[1]) > 0.99         # turned 90 deg about z with the gripper
+    assert bent.bodies[0].position[0] > 5e-3 and bent.bodies[0].rotation[2, 2] < np.cos(np.radians(3))   # carried, tilted
+    for solution in (down, released, clear):
+        bar = solution.bodies[0]
+        assert bar.resting and bar.corners.pressed.sum() == 4
+        assert bar.rotation[2, 2] > 1 - 1e-9                  # flat on the table
+        assert bar.position[0] > 5e-3                          # put down further along +x
+        assert np.abs(bar.residual_force).max() < 1e-12 and solution.balance.relative < 1e-6
+    assert all(c.normal_force > 1e-3 for c in down.bodies[0].grips)        # still pressed as it lands
+    for solution in (released, clear):                       # let go: the table carries all of it
+        bar = solution.bodies[0]
+        assert not bar.grips
+        assert_allclose(bar.support_force, [0, 0, weight], rtol=0, atol=1e-12)
+    assert_allclose(clear.bodies[0].position, released.bodies[0].position, rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
