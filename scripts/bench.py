@@ -300,22 +300,50 @@ def contact_rates(repeats):
     """Solve times with contact against without: build, cold (continuation from the reference
     state, localisation, error estimate) and a warm solve after a 1 % change of the load
     (``Simulation.solve`` from the last answer)."""
-    from tca_casadi.solvers.collocation import clear_built_solvers
     out = {}
     for label, (plain, touching, path) in CONTACT.items():
         for key, name in (("without", plain), ("with", touching)):
-            if name is None:
-                continue
-            row = {}
-            row["build_s"], row["cold_s"], sim, cold = first_solves(SCENARIOS / f"{name}.yaml", repeats)
-            sim.set_parameter(path, sim.get_parameter(path) * 1.01)
-            row["warm_s"], warm = median_time(lambda: sim.solve(warm_start=cold, warn=False), max(repeats, 5))
-            row["converged"] = bool(cold.converged and warm.converged)
-            row["contacts"] = len(warm.contacts)
-            row["unknowns"] = int(sim.solver().nlp.w.numel())
-            out[f"{label} {key} contact"] = row
-            clear_built_solvers()
+            if name is not None:
+                out[f"{label} {key} contact"] = contact_row(
+                    SCENARIOS / f"{name}.yaml", repeats,
+                    lambda sim, path=path: sim.set_parameter(path, sim.get_parameter(path) * 1.01))
     out.update(grasp_rates(repeats))
+    out.update(friction_rates(repeats))
+    return out
+
+
+def contact_row(source, repeats, load, warm_from=None):
+    """One contact row: build and cold medians of ``source``, then ``load(sim)`` and the median
+    warm solve from the cold answer (or from ``warm_from(sim, cold)``), with the unknowns and
+    the closed contacts counted."""
+    from tca_casadi.solvers.collocation import clear_built_solvers
+    row = {}
+    row["build_s"], row["cold_s"], sim, cold = first_solves(source, repeats)
+    start = cold if warm_from is None else warm_from(sim, cold)
+    load(sim)
+    row["warm_s"], warm = median_time(lambda: sim.solve(warm_start=start, warn=False), max(repeats, 5))
+    row["converged"] = bool(cold.converged and start.converged and warm.converged)
+    row["contacts"] = len(warm.contacts)
+    row["unknowns"] = int(sim.solver().nlp.w.numel())
+    clear_built_solvers()
+    return row
+
+
+def friction_rates(repeats):
+    """Friction against an obstacle: the propped cantilever (``scenarios/analytic/
+    propped_cantilever.yaml``) with a frictionless knife edge and with ``friction: 0.5`` on
+    Coulomb's cone: build, cold, and the warm solve that pushes the tip sideways by 6 mN (the
+    frictional tip slides along the edge)."""
+    import yaml
+    with open(SCENARIOS / "analytic" / "propped_cantilever.yaml") as handle:
+        raw = yaml.safe_load(handle)
+    raw["loads"] = [{"name": "side", "kind": "point", "module": "rod", "at": "end", "force": [0, 0, 0]}]
+    out = {}
+    for key, mu in (("without", 0.0), ("with", 0.5)):
+        raw["obstacles"][0]["friction"] = mu
+        raw["contact"] = {"friction_law": "coulomb"}
+        out[f"propped cantilever pushed sideways, {key} friction"] = contact_row(
+            raw, repeats, lambda sim: sim.set_parameter("side.force", [0, 6e-3, 0]))
     return out
 
 
@@ -324,25 +352,17 @@ def grasp_rates(repeats):
     and table: build, cold, and the warm solve that lifts the squeezed block 1 mm (the grips
     stick where they closed; without the block, the same squeeze and lift)."""
     import yaml
-    from tca_casadi.solvers.collocation import clear_built_solvers
     with open(SCENARIOS / "analytic" / "free_pinch.yaml") as handle:
         with_block = yaml.safe_load(handle)
     without = {k: v for k, v in with_block.items() if k not in ("objects", "obstacles")}
-    out = {}
-    for key, raw in (("without", without), ("with", with_block)):
-        row = {}
-        row["build_s"], row["cold_s"], sim, cold = first_solves(raw, repeats)
+
+    def squeezed(sim, cold):
         sim.set_parameter("squeeze_left.force", [2e-3, 0, 0])
         sim.set_parameter("squeeze_right.force", [-2e-3, 0, 0])
-        squeezed = sim.solve(warm_start=cold, warn=False)
-        sim.set_parameter("base.position", [0, 0, 1e-3])
-        row["warm_s"], warm = median_time(lambda: sim.solve(warm_start=squeezed, warn=False), max(repeats, 5))
-        row["converged"] = bool(cold.converged and squeezed.converged and warm.converged)
-        row["contacts"] = len(warm.contacts)
-        row["unknowns"] = int(sim.solver().nlp.w.numel())
-        out[f"free pinch {key} block"] = row
-        clear_built_solvers()
-    return out
+        return sim.solve(warm_start=cold, warn=False)
+    return {f"free pinch {key} block": contact_row(raw, repeats, lambda sim: sim.set_parameter("base.position",
+                                                                                               [0, 0, 1e-3]), squeezed)
+            for key, raw in (("without", without), ("with", with_block))}
 
 
 def print_contact(rates):

@@ -226,7 +226,7 @@ def _validate(args):
           f"{len(scenario.loads)} load(s), {len(scenario.objects)} object(s); tip: "
           f"{robot.modules[robot.tip_index].name}")
     import numpy as np
-    from .model.bodies import history_names_of
+    from .model.history import history_names_of
     history = history_names_of(robot)
     names = [name for name in robot.layout.names() if name not in history]
     print(f"parameters ({len(names)}: --set or sweep them without rebuilding the model):")
@@ -236,8 +236,9 @@ def _validate(args):
         text = f"{value[0]:.6g}" if value.size == 1 else "[" + ", ".join(f"{v:.6g}" for v in value) + "]"
         print(f"  {name:<44} {text} {UNIT_OF[robot.layout.kind(name)]}")
     if history:
-        print(f"contact history ({len(history)} parameters objects.NAME.grip|support.*: each solve copies "
-              "them from the solution it starts from)")
+        kinds = sorted({".".join(name.split(".")[0:1] + ["NAME"] + name.split(".")[2:3]) for name in history})
+        print(f"contact history ({len(history)} parameters {', '.join(k + '.*' for k in kinds)}: friction's anchors, "
+              "each solve copies them from the solution it starts from)")
     _print_thermal(scenario, robot)
     return 0
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from .errors import ScenarioError
 from .model import Robot
-from .model.bodies import carried_history, history_names_of
+from .model.history import carried_history, history_names_of
 from .solvers.assemble import record_slides
 from .scenario import load_scenario
 from .scenario.loader import validate
@@ -135,11 +135,15 @@ class Simulation:
             solution = solver.solve(self.params, initial)
             if continuation == "auto" and _needs_continuation(solution):
                 solution = _better(solution, self.continue_from_rest(solver))
+        if self.robot.path_dependent and solution.converged:
+            # friction: the state reached carries its path's history (each contact anchored where
+            # it ended up), which a refined solve, and the next solve, start from
+            self.params = carried_history(self.robot, self.params, solution)
         if initial is None and solution.converged and solver.estimates_error:
             solver, solution, _ = accuracy.control(solver, solution, self.params, refine)
             self._solvers[method or self.method] = solver
         if solution.converged and (solution.penetration > self.robot.contact_tolerance or self.robot.added_contacts) \
-                and solver.estimates_error:
+                and solver.estimates_error and not self.robot.frictional_contacts:
             solver, solution = localise(self, solver, solution)         # contacts between candidates
             self._solvers[method or self.method] = solver
         record_slides(self.robot, start, solution)
@@ -209,7 +213,7 @@ class Simulation:
         ``initial``'s parameters to these, then from the reference state when that is clear of
         every obstacle, IPOPT last."""
         start = initial.parameters
-        if self.robot.bodies and initial.converged and start is not None and start.size == self.params.size:
+        if self.robot.path_dependent and initial.converged and start is not None and start.size == self.params.size:
             return self._follow_from(solver, initial)
         ipopt = solver.options.algorithm == "ipopt"
         solution = solver.solve_ipopt(self.params, initial) if ipopt else \
@@ -234,6 +238,10 @@ class Simulation:
         if lam < 1.0:
             return self._stalled(solver, solution, start, target, lam, 1e-4, failure, iterations,
                                  time.perf_counter() - started, origin="the previous solution")
+        if solver.options.algorithm == "ipopt":          # the path by Newton steps, its end by IPOPT
+            polished = solver.solve_ipopt(carried_history(self.robot, self.params, solution), solution)
+            solution = polished if polished.converged else solution
+            iterations += polished.iterations
         solution.result = solution.result.noted(f"continuation from the previous solution, {steps} steps").replace(
             solve_time_s=time.perf_counter() - started, nit=iterations)
         return solution

@@ -89,9 +89,9 @@ class ContactResult:
     """One closed contact (a candidate whose normal force is not zero; issue 17): where, the
     obstacle's outward normal, the forces [N] and the gap [m] (global frame, SI). Frictionless
     contacts carry no tangential force; ``friction_margin = friction f_n - |f_t|`` [N];
-    ``sliding``: a grip on Coulomb's cone sliding over the body (``contact.friction_law:
-    coulomb``), ``slip`` [m] how far over the last step, ``slid`` [m] how far its rod point
-    moved over the body since the state the solve started from (Coulomb: the grasp slid)."""
+    ``sliding``: on Coulomb's cone, sliding over the body or obstacle (``contact.friction_law:
+    coulomb``), ``slip`` [m] how far over the last step; ``slid`` [m] (grips) how far its rod
+    point moved over the body since the state the solve started from (Coulomb: the grasp slid)."""
     module: str
     s: float
     obstacle: str

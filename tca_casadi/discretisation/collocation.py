@@ -30,7 +30,8 @@ import numpy as np
 from ..model import boundary
 from ..model.compatibility import compatibility_residuals
 from ..model.bodies import (CONTACT_UNKNOWNS, CORNER_SIGNS, body_equilibrium, body_pose, body_scales, body_shape,
-                             corner_points, grip_friction, support_equations, support_parameter)
+                             corner_points, friction_equations, grip_friction, support_equations)
+from ..model.history import support_parameter
 from ..model.contact import contact_geometry, normal_contact, outline_size
 from ..model.loads import distributed_fields, is_active
 from ..model.rod import STATE_SIZE, rod_equations
@@ -113,6 +114,14 @@ class CollocationNLP:
         self.contact_index = offset + np.arange(len(contacts))
         offset += len(contacts)
         self._contact_forces = blocks[-1] * ca.DM(scales[-1]) if len(contacts) else ca.MX(0, 1)
+        self._frictions, self.friction_index = {}, {}
+        for c in contacts:                 # against obstacles with friction: f_t (3) and the slip
+            if self.robot.frictional(c):
+                index = []
+                (_, tangential, slip), offset = self._contact_block(f"friction_{c.index}",
+                                                                    self.robot.modules[c.module].force_scale,
+                                                                    blocks, scales, offset, index, normal=False)
+                self._frictions[c.index], self.friction_index[c.index] = (tangential, slip), index[0]
         offset = self._declare_bodies(blocks, scales, offset)
         self.w = ca.vertcat(*blocks)
         self.scale = np.concatenate(scales)
@@ -157,15 +166,28 @@ class CollocationNLP:
         return offset
 
     @staticmethod
-    def _contact_block(name, force_scale, blocks, scales, offset, index):
-        """One frictional contact's unknowns ``(f_n [N], f_t (3,) [N], lambda)``, appended to
-        ``blocks``/``scales`` (forces scaled by ``force_scale``) and their indices to ``index``;
-        returns them and the next offset."""
-        block = ca.MX.sym(name, CONTACT_UNKNOWNS)
+    def _contact_block(name, force_scale, blocks, scales, offset, index, normal=True):
+        """One frictional contact's unknowns ``(f_n [N], f_t (3,) [N], lambda)`` (``normal``
+        False: without ``f_n``, which is None), appended to ``blocks``/``scales`` (forces scaled
+        by ``force_scale``) and their indices to ``index``; returns them and the next offset."""
+        size = CONTACT_UNKNOWNS - (0 if normal else 1)
+        block = ca.MX.sym(name, size)
         blocks.append(block)
-        scales.append(np.r_[np.full(4, force_scale), 1.0])
-        index.append(offset + np.arange(CONTACT_UNKNOWNS))
-        return (block[0] * force_scale, block[1:4] * force_scale, block[4]), offset + CONTACT_UNKNOWNS
+        scales.append(np.r_[np.full(size - 1, force_scale), 1.0])
+        index.append(offset + np.arange(size))
+        first = 1 if normal else 0
+        return ((block[0] * force_scale if normal else None), block[first:first + 3] * force_scale,
+                block[first + 3]), offset + size
+
+    @property
+    def slip_index(self):
+        """Indices of every slip multiplier ``lambda`` (grips, support corners, contacts against
+        obstacles with friction): zero when the history is carried from the state itself (each
+        contact anchored where it is has not slipped)."""
+        out = [index[CONTACT_UNKNOWNS - 1] for index in self.grip_index]
+        out += [index[CONTACT_UNKNOWNS - 1::CONTACT_UNKNOWNS] for index in self.support_index.values()]
+        out += [index[-1] for index in self.friction_index.values()]
+        return np.array(np.hstack(out) if out else [], int)
 
     @property
     def parameter_size(self):
@@ -184,7 +206,8 @@ class CollocationNLP:
         parameters, or (a grip) the body at its unknown pose, symbolic."""
         if contact.body is not None:
             return (self._body_shapes[contact.body],) + self._grips[contact.index][0:2]
-        return self.robot.obstacle_of(contact.obstacle, self.param), self._contact_forces[contact.index], None
+        tangential = self._frictions[contact.index][0] if contact.index in self._frictions else None
+        return self.robot.obstacle_of(contact.obstacle, self.param), self._contact_forces[contact.index], tangential
 
     def param(self, name):
         return self.P[self.robot.layout[name]]
@@ -368,12 +391,23 @@ class CollocationNLP:
 
     def _contact_conditions(self):
         """One scaled complementarity per contact (:func:`~tca_casadi.model.contact.normal_contact`)
-        on the gap at its candidate's node."""
-        for c in self.robot.contacts:
-            module = self.robot.modules[c.module]
+        on the gap at its candidate's node; against an obstacle with friction, its four friction
+        equations (:func:`~tca_casadi.model.bodies.friction_equations`, the anchor measured
+        from the obstacle's position)."""
+        robot = self.robot
+        for c in robot.contacts:
+            module = robot.modules[c.module]
             node = self._node_at[c.module][_breakpoint(self._node_at[c.module], c.s)]
-            g, _, _ = contact_geometry(self.robot.obstacle_of(c.obstacle, self.param), module, node)
-            self._g.append(normal_contact(self._contact_forces[c.index], g, module.force_scale, outline_size(module)))
+            shape = robot.obstacle_of(c.obstacle, self.param)
+            g, n, point = contact_geometry(shape, module, node)
+            f, fs, gs = self._contact_forces[c.index], module.force_scale, outline_size(module)
+            self._g.append(normal_contact(f, g, fs, gs))
+            if c.index in self._frictions:
+                tangential, slip = self._frictions[c.index]
+                moved = point - shape.position - self.param(robot.contact_parameter(c, "anchor"))
+                self._g.append(friction_equations(moved, n, self.param(robot.contact_parameter(c, "sticks")), f,
+                                                  tangential, slip, g, fs, gs, robot.obstacles[c.obstacle].friction,
+                                                  robot.friction_law == "coulomb"))
         self._body_conditions()
 
     def _body_conditions(self):

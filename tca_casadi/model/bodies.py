@@ -14,7 +14,8 @@ the contact forces of the modules that may touch it (``held_by``) and the reacti
 body at its corner ``y_j``).
 
 **Friction**, the same at every contact of a body (a grip: a rod candidate against it; a
-corner against its support). A contact carries a normal force ``f_n`` (the complementarity of
+corner against its support) and of a rod against an obstacle with friction (the anchor
+measured from the obstacle's position). A contact carries a normal force ``f_n`` (the complementarity of
 :mod:`.contact`), a tangential force ``f_t`` (3,) and a slip multiplier ``lambda >= 0``, with
 three equations that blend friction with no friction by the side of the normal
 complementarity's corner, and one for ``lambda``::
@@ -65,7 +66,7 @@ from .obstacles import Box
 # history parameters through this module without loading any numerical library)
 
 #: width of the smooth step between friction and no friction, on ``f / f_s - g / g_s``
-STICK_SMOOTHING = 1e-3
+STICK_SMOOTHING = 1e-5
 #: smoothing of ``|f_t|`` on Coulomb's cone, as a fraction of the force scale
 CONE_SMOOTHING = 1e-9
 #: a corner's compliance against its support, normal and tangential: it gives by this fraction
@@ -271,77 +272,3 @@ def grip_points(scenario, points=None):
                                      given.get(m, ()))
             out.extend((b, m, K, float(s)) for K, s in enumerate(spots))
     return out
-
-
-def grip_parameter(body, module, number, key):
-    """The name of a grip's history parameter ``key`` (``anchor`` or ``sticks``): ``body``,
-    ``module`` names, ``number`` its place among the module's candidates."""
-    return f"objects.{body}.grip.{module}.{number}.{key}"
-
-
-def support_parameter(body, corner, key):
-    """The name of a body's support history parameter ``key`` (``anchor`` or ``sticks``) of its
-    ``corner`` (0-7, :data:`CORNER_SIGNS`)."""
-    return f"objects.{body}.support.{corner}.{key}"
-
-
-#: the first element of a history parameter's ``source`` (it is no scenario key)
-HISTORY = "history"
-
-
-def history_names(scenario):
-    """The history parameters of the contact objects, ``[(name, size), ...]`` (module
-    docstring): per grip ``objects.NAME.grip.MODULE.K.anchor`` (3) and ``.sticks``; per corner
-    ``J`` of a supported body ``objects.NAME.support.J.anchor`` (3: where on the plane it is
-    anchored, from its placed position) and ``.sticks``."""
-    bodies = contact_objects(scenario)
-    out = []
-    for b, m, K, _ in grip_points(scenario):
-        out += [(grip_parameter(bodies[b][1].name, scenario.modules[m].name, K, key), size)
-                for key, size in (("anchor", 3), ("sticks", 1))]
-    for _, item in bodies:
-        if item.support is not None:
-            out += [(support_parameter(item.name, j, key), size) for j in range(len(CORNER_SIGNS))
-                    for key, size in (("anchor", 3), ("sticks", 1))]
-    return out
-
-
-def carried_history(robot, params, solution):
-    """``params`` with the contact objects' history set from ``solution`` (the state a solve
-    starts from; None: a cold start, the scenario's history): each grip closed there is
-    anchored where its rod point touched the body (in the body's frame) and sticks, an open one
-    does not; so does each corner pressed on its support there, anchored where it pressed."""
-    params = np.array(params, float)
-    if not robot.bodies:
-        return params
-    layout = robot.layout
-    names = history_names_of(robot)
-    if solution is None or not solution.bodies:
-        for name in names:
-            params[layout[name]] = robot.values[layout[name]]
-        return params
-    results = {b.name: b for b in solution.bodies}
-    for c in robot.grips:
-        body, module = robot.bodies[c.body], robot.modules[c.module]
-        found = results.get(body.name)
-        closed = None if found is None else next(
-            (g for g in found.grips if g.module == module.name and abs(g.s - c.s) <= 1e-12 * module.length), None)
-        params[layout[robot.grip_parameter(c, "sticks")]] = 0.0 if closed is None else 1.0
-        if closed is not None:
-            params[layout[robot.grip_parameter(c, "anchor")]] = anchor_of(found.position, found.rotation,
-                                                                          closed.position)
-    for body in robot.bodies:
-        found = results.get(body.name)
-        if body.support is None or found is None or found.corners is None:
-            continue
-        pressed = found.corners.pressed
-        for j, origin in enumerate(placed_corners(body)):
-            params[layout[support_parameter(body.name, j, "sticks")]] = float(pressed[j])
-            if pressed[j]:
-                params[layout[support_parameter(body.name, j, "anchor")]] = found.corners.positions[j] - origin
-    return params
-
-
-def history_names_of(robot):
-    """The names of a robot's history parameters (declared by :func:`history_names`)."""
-    return [name for name in robot.layout.names() if robot.layout.entries[name].source[0] == HISTORY]

@@ -40,10 +40,11 @@ MERGE = 1e-9
 @dataclass(frozen=True)
 class ContactModel:
     """One contact candidate: module index ``module``, arc length ``s`` [m], obstacle index
-    ``obstacle`` into ``robot.obstacles``; ``index`` its position in ``robot.contacts``. A grip
-    (against a free body, :mod:`.bodies`) has ``body`` (index into ``robot.bodies``) instead of
-    ``obstacle``, ``index`` into ``robot.grips`` and ``number``, its place among its module's
-    candidates (its history parameters' names)."""
+    ``obstacle`` into ``robot.obstacles``; ``index`` its position in ``robot.contacts``;
+    ``number`` its place among its module's candidates (the names of its history parameters
+    against an obstacle with friction, :mod:`.history`). A grip (against a free body,
+    :mod:`.bodies`) has ``body`` (index into ``robot.bodies``) instead of ``obstacle`` and
+    ``index`` into ``robot.grips``."""
     module: int
     s: float
     obstacle: object

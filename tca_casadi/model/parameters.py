@@ -160,7 +160,7 @@ def declare(scenario, actuators, point_loads, distributed):
         put(f"{item.name}.mass", item.mass, "mass", ("objects", k, "mass"), 0.0)
         if not item.contact:
             put(f"{item.name}.held", float(item.held), "dimensionless", ("objects", k, "held"), 0.0)
-    from .bodies import HISTORY, history_names
+    from .history import HISTORY, history_names
     for name, size in history_names(scenario):      # set from the solution a solve starts from
         # placed on its support: every corner sticks where it is (one above the plane is open,
         # its sticking idle); no grip yet

@@ -237,6 +237,8 @@ class Robot:
         #: free rigid bodies (:class:`.bodies.BodyModel`) and the grip candidates against them
         #: (:class:`.contact.ContactModel` with ``body`` set; ``index`` into this list)
         self.bodies, self.grips = [], []
+        #: how anchored contacts hold (``contact.friction_law``): ``stick`` or ``coulomb``
+        self.friction_law = "stick"
 
     def obstacle_of(self, k, param):
         """Obstacle k at the parameters: its position ``obstacles.NAME.position`` and its size
@@ -259,8 +261,29 @@ class Robot:
 
     def grip_parameter(self, c, key):
         """The name of a grip's history parameter ``key`` (``anchor`` or ``sticks``)."""
-        from .bodies import grip_parameter
+        from .history import grip_parameter
         return grip_parameter(self.bodies[c.body].name, self.modules[c.module].name, c.number, key)
+
+    def contact_parameter(self, c, key):
+        """The name of a rod contact's history parameter ``key`` against a frictional obstacle."""
+        from .history import contact_parameter
+        return contact_parameter(self.obstacles[c.obstacle].name, self.modules[c.module].name, c.number, key)
+
+    def frictional(self, c):
+        """True for a rod contact (not a grip) against an obstacle with friction."""
+        return c.body is None and self.obstacles[c.obstacle].friction > 0
+
+    @property
+    def frictional_contacts(self):
+        """True when some obstacle has friction: its contacts stay at the candidate points
+        (localisation, which adds and moves candidates, is off: they carry history)."""
+        return any(shape.friction > 0 for shape in self.obstacles)
+
+    @property
+    def path_dependent(self):
+        """True when friction makes an equilibrium depend on the path to it (contact objects, or
+        obstacles with friction): warm solves follow the parameters from the warm start."""
+        return bool(self.bodies) or self.frictional_contacts
 
     @property
     def unknowns(self):
@@ -326,6 +349,7 @@ class Robot:
         robot = cls(modules, actuators, point_loads, distributed, layout, values, scenario.name, obstacles, contacts,
                     scenario.contact.tolerance)
         robot.bodies, robot.grips = _bodies(scenario, obstacles)
+        robot.friction_law = scenario.contact.friction_law
         robot.added_contacts = {m: tuple(sorted(points)) for m, points in (added or {}).items() if points}
         return robot
 
@@ -383,7 +407,7 @@ class Robot:
                                           evaluated.obstacles, self.contacts, self.contact_tolerance))
 
     def _sharing_bodies(self, robot):
-        robot.bodies, robot.grips = self.bodies, self.grips
+        robot.bodies, robot.grips, robot.friction_law = self.bodies, self.grips, self.friction_law
         return robot
 
     def _without_drive_values(self, params):
@@ -556,9 +580,10 @@ def _contacts(scenario, modules, added):
     given = {names.index(name): points for name, points in scenario.contact.at.items()}
     contacts = []
     for m, module in enumerate(modules):
-        for s in candidate_points(module.length, scenario.contact.points, given.get(m, ()), added.get(m, ())):
+        for K, s in enumerate(candidate_points(module.length, scenario.contact.points, given.get(m, ()),
+                                               added.get(m, ()))):
             for k in range(len(obstacles)):
-                contacts.append(ContactModel(m, float(s), k, len(contacts)))
+                contacts.append(ContactModel(m, float(s), k, len(contacts), number=K))
     return obstacles, contacts
 
 

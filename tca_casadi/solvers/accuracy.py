@@ -98,6 +98,11 @@ def interpolate(source, w, target, params):
     forces = {(c.module, c.s, c.obstacle): physical[source.contact_index[c.index]] for c in source.robot.contacts}
     for c in target.robot.contacts:        # the same candidates, or (localisation) some added
         out[target.contact_index[c.index]] = forces.get((c.module, c.s, c.obstacle), 0.0)
+    frictions = {(c.module, c.s, c.obstacle): physical[source.friction_index[c.index]]
+                 for c in source.robot.contacts if c.index in source.friction_index}
+    for c in target.robot.contacts:        # against obstacles with friction: f_t, slip
+        if c.index in target.friction_index:
+            out[target.friction_index[c.index]] = frictions.get((c.module, c.s, c.obstacle), 0.0)
     out[target.body_index] = physical[source.body_index]     # free bodies: grips, poses, supports
     out = out / target.scale
     partial = np.concatenate(target.partial_index) if target.partial_index else np.zeros(0, int)

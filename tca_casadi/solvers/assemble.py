@@ -93,27 +93,30 @@ def physics_warnings(robot, actuators, params):
     return out
 
 
-def contact_results(robot, modules, module_data, forces, clearance=None):
+def contact_results(robot, modules, module_data, forces, clearance=None, frictions=None):
     """``(contacts, loads, clearance, warnings, pattern)`` of a solution with contacts: the
     :class:`ContactResult` of every closed contact, ``{m: (points, forces)}`` (3, k) of all of
     them for the global balance, per obstacle the body's nearest approach ``{name: {gap,
     module, s}}`` (``clearance``, the solver's search between nodes; else the nearest node)
-    a penetration warning where the body cuts deeper than ``robot.contact_tolerance`` and, per
-    candidate, which side of its complementarity's corner it is on (``f / f_s > g / g_s``: the
-    equation's row is the gap's; continuation's corners)."""
+    a penetration warning where the body cuts deeper than ``robot.contact_tolerance``, a
+    ``slipping`` warning for each contact against an obstacle with friction that needs more
+    than it has or slides, and, per candidate, which side of its complementarities' corners it
+    is on (``f / f_s > g / g_s``: the equation's row is the gap's; continuation's corners).
+    ``frictions``: ``{contact index: (f_t (3), slip multiplier)}`` [SI] of the contacts against
+    obstacles with friction."""
     closed, loads, found, warnings, pattern = [], {}, {}, [], []
     for c in robot.contacts:
         module, shape = robot.modules[c.module], robot.obstacles[c.obstacle]
         s, states = module_data[c.module][0], module_data[c.module][1]
         g, n, point = contact_geometry(shape, module, states[:, int(np.argmin(np.abs(s - c.s)))])
         force = float(forces[c.index])
-        pattern.append(force / module.force_scale > float(g) / outline_size(module))
+        tangential, multiplier = (frictions or {}).get(c.index, (np.zeros(3), 0.0))
         points, pushes = loads.setdefault(c.module, ([], []))
         points.append(point)
-        pushes.append(force * n)
-        if force > CLOSED * module.force_scale:
-            closed.append(ContactResult(module.name, float(c.s), shape.name, point, n, force, np.zeros(3),
-                                        float(g), float(shape.friction)))
+        pushes.append(force * n + tangential)
+        _closed_contact(module, c.s, "obstacle", shape.name, point, n, float(g), force, tangential, multiplier,
+                        shape.friction, robot.frictional(c) and robot.friction_law == "coulomb",
+                        closed, warnings, pattern)
     loads = {m: (np.array(p).T, np.array(f).T) for m, (p, f) in loads.items()}
     names = [shape.name for shape in robot.obstacles] + [body.name for body in robot.bodies]
     for name in names:
@@ -139,7 +142,7 @@ def body_results(robot, params, module_data, values):
     more friction than it has or slides, and each grip's and support corner's side of its
     complementarities' corners. ``values``: ``{"grips": [(f_n, f_t (3), slip multiplier), ...],
     "poses": [(6,), ...], "supports": {b: (8 x 5,)}}`` [SI]."""
-    from ..model.bodies import body_pose, body_shape, slides
+    from ..model.bodies import body_pose, body_shape
     from ..solution import BodyResult
     param = robot.param_function(params)
     closed, loads, warnings, pattern = [], {}, [], []
@@ -152,23 +155,13 @@ def body_results(robot, params, module_data, values):
         g, n, point = contact_geometry(shapes[c.body], module, states[:, int(np.argmin(np.abs(s - c.s)))])
         grip = np.asarray(values["grips"][c.index], float)
         force, tangential, multiplier = float(grip[0]), grip[1:4], float(grip[4])
-        pattern.append(force / module.force_scale > float(g) / outline_size(module))
         on_rod = force * n + tangential
         points, pushes = loads.setdefault(c.module, ([], []))
         points.append(point)
         pushes.append(on_rod)
         on_body[c.body].append((point, on_rod))
-        margin = body.friction * force - float(np.linalg.norm(tangential))
-        sliding = body.sliding and body.friction > 0 and slides(multiplier, margin, module.force_scale)
-        if body.sliding:
-            pattern.append(sliding)
-        if force > CLOSED * module.force_scale:
-            slip = multiplier * outline_size(module) / module.force_scale * float(np.linalg.norm(tangential))
-            result = ContactResult(module.name, float(c.s), body.name, point, n, force, tangential, float(g),
-                                   body.friction, sliding=sliding, slip=slip if sliding else 0.0)
-            closed.append(result)
-            if result.slipping:
-                warnings.append(PhysicsWarning("slipping", _slipping_message(body, module, c.s, result)))
+        _closed_contact(module, c.s, "object", body.name, point, n, float(g), force, tangential, multiplier,
+                        body.friction, body.sliding, closed, warnings, pattern)
     loads = {m: (np.array(p).T, np.array(f).T) for m, (p, f) in loads.items()}
     bodies = []
     for body, (r, R), forces in zip(robot.bodies, placed, on_body):
@@ -243,12 +236,38 @@ def record_slides(robot, start, solution):
     return solution
 
 
-def _slipping_message(body, module, s, grip):
-    """What a slipping grip's warning says: it slides (Coulomb), or the friction it would need."""
-    where = f"object {body.name!r} slips at module {module.name} (s = {s * 1e3:.4g} mm): "
-    if grip.sliding:
-        return where + f"the grip slides {grip.slip * 1e6:.3g} um over it on its friction limit ({body.friction:.3g})"
-    return where + f"the grasp needs friction {grip.needed_friction:.3g} there and has {body.friction:.3g}"
+def _closed_contact(module, s, kind, name, point, n, g, force, tangential, multiplier, friction, coulomb, closed,
+                    warnings, pattern):
+    """Append to ``closed`` the :class:`ContactResult` of a rod contact (module ``module`` at
+    arc length ``s`` against the ``kind`` (``object`` or ``obstacle``) ``name``) when it is
+    closed, to ``warnings`` a ``slipping`` warning when it needs more friction than it has
+    (``friction``) or slides (``coulomb``: on Coulomb's cone), to ``pattern`` the sides of its
+    complementarities' corners."""
+    from ..model.bodies import slides
+    fs = module.force_scale
+    pattern.append(force / fs > g / outline_size(module))
+    margin = friction * force - float(np.linalg.norm(tangential))
+    sliding = coulomb and friction > 0 and slides(multiplier, margin, fs)
+    if coulomb:
+        pattern.append(sliding)
+    if force <= CLOSED * fs:
+        return
+    slip = multiplier * outline_size(module) / fs * float(np.linalg.norm(tangential)) if sliding else 0.0
+    result = ContactResult(module.name, float(s), name, point, n, force, np.asarray(tangential, float), g,
+                           float(friction), sliding=sliding, slip=slip)
+    closed.append(result)
+    if result.slipping:
+        warnings.append(PhysicsWarning("slipping", _slipping_message(kind, name, module, s, result)))
+
+
+def _slipping_message(kind, name, module, s, contact):
+    """What a slipping contact's warning says: it slides (Coulomb), or the friction it would need."""
+    where = f"{kind} {name!r} slips at module {module.name} (s = {s * 1e3:.4g} mm): "
+    if contact.sliding:
+        return where + (f"it slides {contact.slip * 1e6:.3g} um over it on its friction limit "
+                        f"({contact.friction:.3g})")
+    what = "grasp" if kind == "object" else "contact"
+    return where + f"the {what} needs friction {contact.needed_friction:.3g} there and has {contact.friction:.3g}"
 
 
 def _nearest_node(robot, shape, module_data):
@@ -263,7 +282,7 @@ def _nearest_node(robot, shape, module_data):
 
 
 def build_solution(robot, params, module_data, tensions, lengths, result, method, raw, notices=(), extra_loads=None,
-                   contact_forces=None, clearance=None, bodies=None):
+                   contact_forces=None, clearance=None, bodies=None, frictions=None):
     """Solution from ``module_data = [(s, states, base_wrench_body, weights), ...]``, tensions per
     actuator (list in ``robot.actuators`` order) and lengths; ``result`` the
     :class:`SolveStatus`, ``method`` the solver's name, ``raw`` its variables (``w`` or ``z``),
@@ -271,7 +290,8 @@ def build_solution(robot, params, module_data, tensions, lengths, result, method
     ``extra_loads``: ``(points, forces, moments)`` (3, k) global, beyond the robot's own loads,
     for the global balance (a dynamic step's inertial loads); ``contact_forces`` (n,) [N] the
     normal force of each of ``robot.contacts`` and ``clearance`` the solver's nearest approach
-    to each obstacle (:func:`contact_results`); ``bodies`` the free bodies' unknowns
+    to each obstacle and ``frictions`` the tangential forces and slips of the contacts against
+    obstacles with friction (:func:`contact_results`); ``bodies`` the free bodies' unknowns
     (:func:`body_results`)."""
     robot = robot.at(params)          # stiffness, routes, laws at these parameters
     modules = [module_result(robot.modules[m], *data) for m, data in enumerate(module_data)]
@@ -284,7 +304,7 @@ def build_solution(robot, params, module_data, tensions, lengths, result, method
     contacts, contact_loads, nearest, pattern = [], None, {}, ()
     if robot.obstacles:
         contacts, contact_loads, nearest, found, pattern = contact_results(robot, modules, module_data,
-                                                                           contact_forces, clearance)
+                                                                           contact_forces, clearance, frictions)
         warnings.extend(found)
     body_list = []
     if robot.bodies:

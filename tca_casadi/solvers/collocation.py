@@ -54,6 +54,9 @@ class CollocationSolver:
         self._higher = None
         self.build_time_s = time.perf_counter() - start
         self.solve_count = 0
+        #: search the gaps between candidates after every solve (:meth:`clearance`; off during
+        #: continuation steps)
+        self.search_between_nodes = True
         log.info("built collocation NLP: %d variables in %.3f s", self.nlp.w.numel(), self.build_time_s)
 
     @classmethod
@@ -221,7 +224,9 @@ class CollocationSolver:
         robot_params = params[:self.robot.layout.size]
         contact = {}
         if self.robot.obstacles:       # (a contact object's support is one)
-            contact = {"contact_forces": w_phys[nlp.contact_index], "clearance": self.clearance(w, params)}
+            contact = {"contact_forces": w_phys[nlp.contact_index],
+                       "clearance": self.clearance(w, params) if self.search_between_nodes else None,
+                       "frictions": {c: (w_phys[i[0:3]], float(w_phys[i[3]])) for c, i in nlp.friction_index.items()}}
         if self.robot.bodies:
             contact["bodies"] = {"grips": [w_phys[i] for i in nlp.grip_index],
                                  "poses": [w_phys[i] for i in nlp.pose_index],

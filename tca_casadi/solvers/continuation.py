@@ -12,7 +12,7 @@ Used by cold starts (from the unloaded reference state) and by sweeps. :class:`A
 is the pseudo-arclength variant that follows a branch through folds (``sweep --arclength``).
 """
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -73,6 +73,9 @@ class BranchFollower:
         """A :class:`BranchPoint` with the linearisation at ``(w, P(lam))`` (``linearisation``:
         one already computed there)."""
         w = solution.raw["w"] if w is None else np.asarray(w, float)
+        if self._history.size:              # anchored where it is: nothing has slipped yet
+            w = w.copy()
+            w[self.solver.nlp.slip_index] = 0.0
         linear = linearisation or self.solver.linearise(w, self.params_at(lam))
         try:
             sign = linear.determinant_sign()
@@ -132,7 +135,7 @@ class BranchFollower:
     def _stick(self, lam, trial, candidate):
         """The accepted point with the history carried from it (the grips closed there are
         anchored where they touch): the same state, linearised again if the history changed."""
-        from ..model.bodies import carried_history
+        from ..model.history import carried_history
         carried = carried_history(self.solver.robot, self.P0, trial)
         if np.array_equal(carried, self.P0):
             return candidate
@@ -161,7 +164,22 @@ class BranchFollower:
         """Step from ``current`` to ``lam = target``, halving failed steps (growing good ones up
         to ``max_step``). Returns ``(point, step, substeps, failure)``; ``failure`` is a
         :class:`StepFailure` when the step fell below ``min_step`` (``point`` is then the last
-        accepted one)."""
+        accepted one). The steps skip the search for contacts between candidates (the nodes'
+        gaps decide the corners); the point returned has it."""
+        searching = getattr(self.solver, "search_between_nodes", False)
+        try:
+            self.solver.search_between_nodes = False
+            point, step, substeps, failure = self._advance(current, target, step, max_step, min_step)
+        finally:
+            if searching:
+                self.solver.search_between_nodes = True
+        if searching and point is not current and self.solver.robot.obstacles:
+            solution = point.solution
+            point = replace(point, solution=self.solver.evaluate(solution.raw["w"], solution.parameters,
+                                                                 solution.result))
+        return point, step, substeps, failure
+
+    def _advance(self, current, target, step, max_step, min_step):
         substeps = 0
         while current.lam < target - 1e-12:
             lam = min(target, current.lam + step)
@@ -197,8 +215,8 @@ class BranchFollower:
 def history_indices(robot):
     """Indices into the parameter vector of a robot's contact-object history (grip anchors and
     support anchors, :mod:`tca_casadi.model.bodies`)."""
-    from ..model.bodies import history_names_of
-    names = history_names_of(robot) if getattr(robot, "bodies", None) else []
+    from ..model.history import history_names_of
+    names = history_names_of(robot) if hasattr(robot, "layout") else []
     return np.array([i for name in names for i in range(robot.layout.size)[robot.layout[name]]], int)
 
 

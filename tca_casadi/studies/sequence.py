@@ -15,7 +15,7 @@ from ..errors import PhysicsWarning, ScenarioError
 from ..simulation import _failure_text
 from ..solvers.continuation import BranchFollower
 from .compare import compare_solutions
-from ..model.bodies import carried_history
+from ..model.history import carried_history
 from ..solvers.assemble import record_slides
 from .objects import ObjectTracker
 from .sweep_result import bending_angle
@@ -213,7 +213,7 @@ def _solve_step(sim, before, previous, frames):
     targets = np.linspace(0, 1, frames + 2)[1:] if frames else [1.0]
     for target in targets:
         point, _, _, failure = follower.advance(point, float(target), float(target - point.lam), 1.0, 1e-4)
-        if failure is not None and sim.robot.bodies:
+        if failure is not None and sim.robot.path_dependent:
             # a grasp's state depends on its path (friction): a solve from the reference state
             # would teleport the objects; the step is reported stalled where it stopped
             return sim._stalled(solver, point.solution, before, sim.params, point.lam, 1e-4,

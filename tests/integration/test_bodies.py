@@ -120,14 +120,21 @@ def test_block_in_results_and_tables(lifted):
 
 
 def test_cold_solve_starts_from_no_history(lifted):
-    """A cold solve forgets the grasp (the history parameters return to the scenario's) and
-    follows the loads up from the reference state, grips sticking from where they close on the
-    way: an equilibrium of the block and of the robot."""
+    """A cold solve forgets the grasp (it starts from the scenario's history) and follows the
+    loads up from the reference state, grips sticking from where they close on the way: an
+    equilibrium of the block and of the robot, after which the history is its own (each closed
+    grip anchored where it touches)."""
+    from tca_casadi.model.bodies import anchor_of
     sim, _ = lifted
     cold = _quiet(sim.solve)
     assert cold.converged
-    assert sim.get_parameter("objects.block.grip.left.3.sticks") == 0.0
-    assert np.abs(cold.bodies[0].residual_force).max() < 1e-12 and cold.balance.relative < 1e-8
+    block = cold.bodies[0]
+    assert np.abs(block.residual_force).max() < 1e-12 and cold.balance.relative < 1e-8
+    for grip in block.grips:
+        name = f"objects.block.grip.{grip.module}.3"
+        assert sim.get_parameter(f"{name}.sticks") == 1.0
+        assert_allclose(sim.get_parameter(f"{name}.anchor"), anchor_of(block.position, block.rotation, grip.position),
+                        rtol=0, atol=1e-9)
 
 
 @pytest.mark.parametrize("change, message", [

@@ -9,6 +9,9 @@ from tca_casadi import Simulation
 from tca_casadi.status import Status
 
 SHIPPED = sorted(SCENARIOS.rglob("*.yaml"))
+# the physical pick-and-place (30 s here) is solved step by step in test_bodies.py; free_pinch
+# stands for scenarios with contact objects (their warm solves are continuations)
+FAST = [p for p in SHIPPED if p.stem != "arm_pick_and_place_contact"]
 
 
 def nudge(sim):
@@ -32,7 +35,7 @@ def assert_same(a, b, position=1e-9, tension=1e-8):
         assert abs(b.actuators[key].tension - actuator.tension) <= tension * floor + 1e-11
 
 
-@pytest.mark.parametrize("path", SHIPPED, ids=[p.stem for p in SHIPPED])
+@pytest.mark.parametrize("path", FAST, ids=[p.stem for p in FAST])
 def test_newton_matches_ipopt_on_a_warm_step(path):
     sim = Simulation.from_file(path)
     start = sim.solve()
@@ -44,7 +47,7 @@ def test_newton_matches_ipopt_on_a_warm_step(path):
     assert_same(by_ipopt, by_newton)
 
 
-@pytest.mark.parametrize("path", SHIPPED, ids=[p.stem for p in SHIPPED])
+@pytest.mark.parametrize("path", FAST, ids=[p.stem for p in FAST])
 def test_newton_algorithm_matches_ipopt_algorithm(path):
     by_ipopt = Simulation.from_file(path, ["solver.algorithm=ipopt"])
     fast = Simulation.from_file(path)                      # newton is the default

@@ -168,3 +168,89 @@ def test_tall_box_tips_past_a_over_2h():
     # it stops where the light corners let go: r = a / (2 h) (continuation's last step 1e-4)
     reached = float(tipped.message.split("reached gravity [0, ")[1].split(",")[0]) / G
     assert reached == pytest.approx(0.5, abs=1e-4)
+
+
+def _frictional_prop(law, mu=0.5):
+    """scenarios/analytic/propped_cantilever.yaml with friction ``mu`` on its knife edge (the
+    ``law``) and a sideways tip load ``side``, solved under its weight alone (cold)."""
+    with open("scenarios/analytic/propped_cantilever.yaml") as handle:
+        raw = yaml.safe_load(handle)
+    raw["obstacles"][0]["friction"] = mu
+    raw["loads"] = [{"name": "side", "kind": "point", "module": "rod", "at": "end", "force": [0, 0, 0]}]
+    raw["contact"] = {"friction_law": law}
+    sim = Simulation.from_file(raw)
+    return sim, _quiet(sim.solve)
+
+
+def test_a_sticking_prop_carries_a_side_load_at_the_tip():
+    """The propped cantilever's tip sticks on its knife edge: a sideways load at the tip goes
+    into the prop whole (f_t = -P), the tip does not move; the friction it needs (the prop also
+    holds the tip against the rod's shortening as it sags: an axial pull) is reported."""
+    sim, sagged = _frictional_prop("stick")
+    assert sagged.converged and sagged.contacts[0].obstacle == "prop"
+    sim.set_parameter("side.force", [0, 3e-3, 0])
+    loaded = _quiet(sim.solve, warm_start=sagged)
+    assert loaded.converged, loaded.message
+    (contact,) = loaded.contacts
+    # all of it but 6e-6: the friction acts on the rod's underside, 1 mm off its axis, and
+    # twists it (3e-6 N m at the clamp); the twisted, sagging rod bends sideways a little
+    assert contact.tangential_force[1] == pytest.approx(-3e-3, rel=1e-5)
+    assert_allclose(loaded.modules[0].base_reaction["moment"][0], 3e-3 * 1e-3, rtol=1e-5)
+    assert abs(loaded.tip_position[1] - sagged.tip_position[1]) < 1e-12
+    assert contact.slipping and contact.needed_friction > 0.5
+    assert "needs friction" in loaded.warning_texts("slipping")[0]
+    assert loaded.balance.relative < 1e-9
+
+
+def test_a_coulomb_prop_lets_the_tip_slide_with_mu_n():
+    """On Coulomb's cone (mu = 0.5) a sideways tip load P above mu N slides the tip along the
+    knife edge: the prop holds back mu N, so the tip deflects as a cantilever under P - mu N,
+    (P - mu N) L^3 / (3 E I) (small deflection; measured 1.8e-4 off)."""
+    sim, sagged = _frictional_prop("coulomb")
+    assert sagged.converged
+    sim.set_parameter("side.force", [0, 6e-3, 0])
+    loaded = _quiet(sim.solve, warm_start=sagged)
+    assert loaded.converged, loaded.message
+    (contact,) = loaded.contacts
+    assert contact.sliding and contact.slipping
+    assert np.linalg.norm(contact.tangential_force) == pytest.approx(0.5 * contact.normal_force, rel=1e-9)
+    assert contact.tangential_force[1] < 0 and abs(contact.tangential_force[0]) < 1e-3 * abs(contact.tangential_force[1])
+    EI = 20e9 * np.pi * 0.002 ** 4 / 64
+    expected = (6e-3 - 0.5 * contact.normal_force) * 0.1 ** 3 / (3 * EI)
+    assert loaded.tip_position[1] - sagged.tip_position[1] == pytest.approx(expected, rel=1e-3)
+    assert loaded.balance.relative < 1e-9
+
+
+@pytest.mark.parametrize("seed", [11, 12, 13, 14])
+def test_random_frictional_contacts_obey_the_cone_and_the_balance(seed):
+    """Rods pushed against random spheres, walls and boxes with random friction (either law),
+    then loaded along the contact's tangent: every contact's friction is tangential, inside
+    its cone (Coulomb; on it exactly where it slides), the verdict matches the margin
+    (sticking), the complementarity holds and the robot balances."""
+    import sys
+    sys.path.insert(0, "tests/integration")
+    from test_contact import random_obstacle_scenarios
+    rng = np.random.default_rng(seed)
+    scenario = next(random_obstacle_scenarios(1, seed=seed))
+    mu, law = float(rng.uniform(0.2, 1.0)), ("stick", "coulomb")[seed % 2 == 0]    # 12 slides
+    scenario["obstacles"][0]["friction"] = mu
+    scenario["contact"] = {"friction_law": law}
+    scenario["loads"].append({"name": "drag", "kind": "point", "module": "rod", "at": "end", "force": [0, 0, 0]})
+    sim = Simulation.from_file(scenario)
+    pushed = _quiet(sim.solve)
+    assert pushed.converged, pushed.message
+    sim.set_parameter("drag.force", [0, 0, float(rng.uniform(-3e-3, 3e-3))])
+    dragged = _quiet(sim.solve, warm_start=pushed)
+    assert dragged.converged, dragged.message
+    assert dragged.balance.relative < 1e-8
+    assert dragged.contacts
+    for c in dragged.contacts:
+        assert c.gap >= -1e-9 and c.normal_force > 0 and abs(c.gap * c.normal_force) < 1e-9
+        assert abs(np.dot(c.tangential_force, c.normal)) < 1e-12
+        cone = mu * c.normal_force
+        if law == "coulomb":
+            assert np.linalg.norm(c.tangential_force) <= cone * (1 + 1e-6) + 1e-12
+            if c.sliding:
+                assert np.linalg.norm(c.tangential_force) == pytest.approx(cone, rel=1e-6)
+        else:
+            assert c.slipping == (np.linalg.norm(c.tangential_force) > cone)

@@ -55,7 +55,7 @@ def _compare(first, second, tip_atol=1e-9, tension_rtol=1e-7):
 
 
 def test_every_parameter_name_is_a_set_path_of_the_scenario(scenarios):
-    from tca_casadi.model.bodies import history_names_of
+    from tca_casadi.model.history import history_names_of
     """Each layout name, given to --set with its own value, leaves the parameters unchanged and
     needs no rebuild."""
     for path in sorted(scenarios.glob("*.yaml")):
