@@ -459,11 +459,13 @@ class Solution:
                            for name, _, scale in extra)
             lines.append(f"  {key:<22}{temp}{pull}{a.tension * 1e3:11.4f}{a.stroke * 1e3:13.4f}{free}{slack}{more}")
         if self.clearance:
-            lines.append(f"  {'contact':<22}{'s [mm]':>9}{'f_n [mN]':>11}{'gap [um]':>10}  position [mm]")
+            lines.append(f"  {'contact':<22}{'s [mm]':>9}{'f_n [mN]':>11}{'|f_t| [mN]':>11}{'gap [um]':>10}"
+                         "  position [mm]")
             for c in self.contacts:
                 where = " ".join(signed(x * 1e3) for x in c.position)
+                state = " SLIDING" if c.sliding else (" SLIPPING" if c.slipping else "")
                 lines.append(f"  {c.module + ' / ' + c.obstacle:<22}{c.s * 1e3:9.3f}{c.normal_force * 1e3:11.4f}"
-                             f"{c.gap * 1e6:10.4f}  {where}")
+                             f"{np.linalg.norm(c.tangential_force) * 1e3:11.4f}{c.gap * 1e6:10.4f}  {where}{state}")
             if not self.contacts:
                 nearest = min(self.clearance.items(), key=lambda item: item[1]["gap"])
                 lines.append(f"  no contact; nearest obstacle {nearest[0]!r} {nearest[1]['gap'] * 1e3:.4g} mm away")
