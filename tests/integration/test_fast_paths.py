@@ -36,24 +36,20 @@ def assert_same(a, b, position=1e-9, tension=1e-8):
 
 
 @pytest.mark.parametrize("path", FAST, ids=[p.stem for p in FAST])
-def test_newton_matches_ipopt_on_a_warm_step(path):
-    sim = Simulation.from_file(path)
-    start = sim.solve()
-    nudge(sim)
-    solver = sim.solver()
-    by_ipopt = solver.solve_ipopt(sim.params, start)
-    by_newton = solver.solve_newton(sim.params, start.raw["w"])
-    assert by_newton.result.algorithm == "Newton" and by_newton.status == Status.CONVERGED
-    assert_same(by_ipopt, by_newton)
-
-
-@pytest.mark.parametrize("path", FAST, ids=[p.stem for p in FAST])
-def test_newton_algorithm_matches_ipopt_algorithm(path):
+def test_newton_matches_ipopt_cold_warm_and_on_a_step(path):
+    """Cold, the default algorithm (newton) and ``solver.algorithm: ipopt`` agree; after a nudge,
+    one Newton step equals IPOPT's from the same start; and so do the two warm solves."""
     by_ipopt = Simulation.from_file(path, ["solver.algorithm=ipopt"])
     fast = Simulation.from_file(path)                      # newton is the default
     assert fast.scenario.solver.algorithm == "newton"
-    assert_same(by_ipopt.solve(), fast.solve())
+    start = fast.solve()
+    assert_same(by_ipopt.solve(), start)
     nudge(by_ipopt), nudge(fast)
+    solver = fast.solver()
+    step_ipopt = solver.solve_ipopt(fast.params, start)
+    step_newton = solver.solve_newton(fast.params, start.raw["w"])
+    assert step_newton.result.algorithm == "Newton" and step_newton.status == Status.CONVERGED
+    assert_same(step_ipopt, step_newton)
     warm_ipopt, warm_fast = by_ipopt.solve(warm_start="last"), fast.solve(warm_start="last")
     assert warm_fast.result.algorithm == "Newton" and warm_ipopt.result.algorithm == "IPOPT"
     assert_same(warm_ipopt, warm_fast)
