@@ -223,10 +223,11 @@ def support_equations(plane, body, r, R, anchors, sticks, corner_unknowns):
     fo, lo = body_scales(body)
     gaps, n = support_gaps(plane, body, r, R)
     out = []
-    for j, (point, g, (f, t, slip)) in enumerate(zip(corner_points(body, r, R), gaps, corner_unknowns)):
+    for point, origin, anchor, g, (f, t, slip), stick in zip(corner_points(body, r, R), placed_corners(body), anchors,
+                                                             gaps, corner_unknowns, sticks):
         out.append(normal_contact(f, g + SUPPORT_COMPLIANCE * lo * f / fo, fo, lo))
-        moved = point - ca.DM(placed_corners(body)[j]) - anchors[j]
-        out.append(friction_equations(moved, n, sticks[j], f, t, slip, g, fo, lo, body.support_friction,
+        moved = point - ca.DM(origin) - anchor
+        out.append(friction_equations(moved, n, stick, f, t, slip, g, fo, lo, body.support_friction,
                                       body.sliding, SUPPORT_COMPLIANCE))
     return ca.vertcat(*out)
 

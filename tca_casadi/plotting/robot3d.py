@@ -73,7 +73,7 @@ def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_point
     _equal_axes(ax, np.hstack(everything))
     style_axes(ax)
     state = "" if solution.converged else "  (NOT CONVERGED)"
-    ax.set_title(title or f"{solution.scenario_name}{state}", fontsize=10)
+    ax.set_title(f"{title or solution.scenario_name}{state}", fontsize=10)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="upper left", fontsize=7)
     return ax

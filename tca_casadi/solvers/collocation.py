@@ -54,9 +54,6 @@ class CollocationSolver:
         self._higher = None
         self.build_time_s = time.perf_counter() - start
         self.solve_count = 0
-        #: search the gaps between candidates after every solve (:meth:`clearance`; off during
-        #: continuation steps)
-        self.search_between_nodes = True
         log.info("built collocation NLP: %d variables in %.3f s", self.nlp.w.numel(), self.build_time_s)
 
     @classmethod
@@ -162,25 +159,28 @@ class CollocationSolver:
         """:class:`Linearisation` of the square system at scaled variables ``w`` and ``params``."""
         return self.square.linearise(w, params)
 
-    def solve_newton(self, params, w0, lu=None):
+    def solve_newton(self, params, w0, lu=None, search=True):
         """Newton's method on the square system from scaled variables ``w0`` (a predictor):
         the same equations and tolerance as :meth:`solve`, without IPOPT's machinery (``lu``: a
-        factorised Jacobian from a nearby point for the first chord steps)."""
+        factorised Jacobian from a nearby point for the first chord steps; ``search``: as in
+        :meth:`evaluate`)."""
         params = np.asarray(params, dtype=float)
         w, status = self.square.newton(w0, params, self.options.tolerance, lu=lu)
         self.solve_count += 1
-        return self.evaluate(w, params, status)
+        return self.evaluate(w, params, status, search)
 
-    def evaluate(self, w, params, status):
+    def evaluate(self, w, params, status, search=True):
         """A :class:`Solution` from scaled variables ``w`` found by some algorithm (Newton, the
         pseudo-arclength corrector); ``status`` its :class:`SolveStatus` (a residual that is not
-        a number is evaluated at ``(w, params)``)."""
+        a number is evaluated at ``(w, params)``); ``search`` False skips the search for contacts
+        between candidates (:meth:`clearance`; continuation's intermediate steps: the nodes'
+        gaps stand in)."""
         w, params = np.asarray(w, float), np.asarray(params, float)
         if not np.isfinite(status.residual):
             status = SolveStatus.judged(status.algorithm, self.max_residual(w, params), status.tolerance,
                                         status.status, nit=status.nit, solve_time_s=status.solve_time_s,
                                         detail=status.detail)
-        return self._assemble(w, params, status.replace(build_time_s=self.build_time_s))
+        return self._assemble(w, params, status.replace(build_time_s=self.build_time_s), search)
 
     def max_residual(self, w, params):
         """Largest scaled constraint violation at ``(w, params)``."""
@@ -207,7 +207,7 @@ class CollocationSolver:
                            for m, module in enumerate(self.robot.modules)]
         return self._nodes
 
-    def _assemble(self, w, params, status):
+    def _assemble(self, w, params, status, search=True):
         nlp = self.nlp
         lengths, ends, base = self._outputs_at(w, params)
         w_phys = w * nlp.scale
@@ -225,7 +225,7 @@ class CollocationSolver:
         contact = {}
         if self.robot.obstacles:       # (a contact object's support is one)
             contact = {"contact_forces": w_phys[nlp.contact_index],
-                       "clearance": self.clearance(w, params) if self.search_between_nodes else None,
+                       "clearance": self.clearance(w, params) if search else None,
                        "frictions": {c: (w_phys[i[0:3]], float(w_phys[i[3]])) for c, i in nlp.friction_index.items()}}
         if self.robot.bodies:
             contact["bodies"] = {"grips": [w_phys[i] for i in nlp.grip_index],

@@ -99,7 +99,7 @@ class BranchFollower:
         or a box tipping, which IPOPT does not mend: a stall there took 45 s instead of 2)."""
         predicted = current.w + (lam - current.lam) * current.w_rate
         lu = current.linearisation.lu if current.linearisation is not None else None
-        trial = self.solver.solve_newton(self.params_at(lam), predicted, lu=lu)
+        trial = self.solver.solve_newton(self.params_at(lam), predicted, lu=lu, search=False)
         if not trial.converged and lam - current.lam <= self.IPOPT_STEP + 1e-12 and not self._history.size:
             trial = self.solver.solve_ipopt(self.params_at(lam), current.solution)
         self.iterations += trial.iterations
@@ -166,14 +166,8 @@ class BranchFollower:
         :class:`StepFailure` when the step fell below ``min_step`` (``point`` is then the last
         accepted one). The steps skip the search for contacts between candidates (the nodes'
         gaps decide the corners); the point returned has it."""
-        searching = getattr(self.solver, "search_between_nodes", False)
-        try:
-            self.solver.search_between_nodes = False
-            point, step, substeps, failure = self._advance(current, target, step, max_step, min_step)
-        finally:
-            if searching:
-                self.solver.search_between_nodes = True
-        if searching and point is not current and self.solver.robot.obstacles:
+        point, step, substeps, failure = self._advance(current, target, step, max_step, min_step)
+        if point is not current and self.solver.robot.obstacles:
             solution = point.solution
             point = replace(point, solution=self.solver.evaluate(solution.raw["w"], solution.parameters,
                                                                  solution.result))
@@ -184,7 +178,7 @@ class BranchFollower:
         while current.lam < target - 1e-12:
             lam = min(target, current.lam + step)
             trial = self.step(current, lam)
-            jump, crossed = np.inf, False
+            jump, crossed, dropped, moved = np.inf, False, (), 0.0
             if trial.converged:
                 candidate = self.point(lam, trial)
                 # where a tension-only actuator goes slack or taut, or a contact closes or opens,
@@ -194,7 +188,6 @@ class BranchFollower:
                 corner = _slack_pattern(current.solution) != _slack_pattern(trial)
                 jump = 0.0 if corner else self.inconsistency(current, candidate)
                 crossed = not corner and candidate.det_sign * current.det_sign < 0
-                dropped, moved = (), 0.0
                 if self._history.size:       # contact objects
                     jump = self._grasp_jump(corner, lam - current.lam, jump)
                     dropped, moved = self._dropped(current, candidate)
@@ -207,8 +200,7 @@ class BranchFollower:
                     continue
             step /= 2
             if step < min_step:
-                return current, step, substeps, (StepFailure(trial, jump, crossed, dropped, moved) if trial.converged
-                                                 else StepFailure(trial, jump, crossed))
+                return current, step, substeps, StepFailure(trial, jump, crossed, dropped, moved)
         return current, step, substeps, None
 
 

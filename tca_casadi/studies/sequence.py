@@ -114,7 +114,7 @@ class SequenceResult:
                          f"yaw {tip_yaw(solution):+7.2f} deg{extra}{flag}")
         lines += [f"  warning: {w}" for w in self.warnings]
         lines += [f"  warning: step {name!r}: {w}" for name, solution in zip(self.names, self.solutions)
-                  for w in solution.warnings if w.kind in ("slipping", "penetration")]
+                  for w in solution.warnings if w.kind in ("slipping", "penetration", "not_converged")]
         return "\n".join(lines)
 
 

@@ -254,3 +254,25 @@ def test_random_frictional_contacts_obey_the_cone_and_the_balance(seed):
                 assert np.linalg.norm(c.tangential_force) == pytest.approx(cone, rel=1e-6)
         else:
             assert c.slipping == (np.linalg.norm(c.tangential_force) > cone)
+
+
+def test_a_sequence_whose_grasp_gives_says_so_and_keeps_its_files(tmp_path, capsys):
+    """tca-casadi sequence on the pinch made too heavy while lifted (Coulomb): the step is not
+    converged, the summary says why (the grasp cannot hold it), the files are written and the
+    exit code is 1."""
+    from tca_casadi.cli import main
+    with open(PINCH) as handle:
+        raw = yaml.safe_load(handle)
+    raw["contact"]["friction_law"] = "coulomb"
+    raw["sequence"] = [{"name": "squeeze", "set": {"squeeze_left.force": ["2 mN", 0, 0],
+                                                   "squeeze_right.force": ["-2 mN", 0, 0]}},
+                       {"name": "lift", "set": {"base.position": [0, 0, "2 mm"]}},
+                       {"name": "heavier", "set": {"block.mass": "0.4 g"}}]
+    path = tmp_path / "pinch.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    code = _quiet(main, ["sequence", str(path), "-o", str(tmp_path / "out"), "--no-animation"])
+    out = capsys.readouterr().out
+    assert code == 1
+    assert "NOT ALL CONVERGED" in out and "cannot hold it (it would drop)" in out
+    assert "warning: step 'heavier': not converged" in out
+    assert (tmp_path / "out" / "sequence.csv").exists() and (tmp_path / "out" / "step_02_heavier.png").exists()
