@@ -9,6 +9,7 @@ squares did not converge.
 import argparse
 import json
 import logging
+import signal
 import sys
 from pathlib import Path
 
@@ -171,7 +172,7 @@ def build_parser():
                      help="leave this fraction of the experiments out of the fit and report their error")
     fit.add_argument("--seed", type=int, default=0, help="seed of --holdout and --starts (default 0)")
     fit.add_argument("--profile", default=None, metavar="PATH",
-                     help="also the profile likelihood of this fitted parameter (its 95 % interval, to compare "
+                     help="also the profile likelihood of this fitted parameter (its 95 %% interval, to compare "
                           "with the Wald interval)")
     _output_arguments(fit, "fit", "fit.png and fit_parameters.png")
     return parser
@@ -180,7 +181,10 @@ def build_parser():
 def main(argv=None):
     """Run one command; the exit code (0, 1, 2, or 130 when interrupted). Run as the program
     (``argv`` None), an interrupt ends the process at once with status 130 (see
-    :func:`_exit_interrupted`)."""
+    :func:`_exit_interrupted`), whatever the parent did with SIGINT (a shell's background job
+    starts with it ignored)."""
+    if argv is None:
+        _take_interrupts()
     try:
         args = build_parser().parse_args(argv)
         logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
@@ -197,10 +201,18 @@ def main(argv=None):
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except KeyboardInterrupt:
+        if argv is None:                 # a second Ctrl-C must not break the one-line report
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
         print("interrupted (files already written are complete)", file=sys.stderr)
         if argv is None:
             _exit_interrupted()
         return 130
+
+
+def _take_interrupts():
+    """Ctrl-C raises KeyboardInterrupt in this process, even where the parent ignored SIGINT
+    (Python keeps an inherited ``SIG_IGN``)."""
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def _exit_interrupted():

@@ -99,7 +99,9 @@ def run_dask(chunks, done, scheduler, lost):
     try:
         futures = {client.submit(solve_chunk, chunk, pure=False): chunk for chunk in chunks}
         attempts = {}
-        finished = as_completed(list(futures))
+        # the client's own loop: as_completed would otherwise look for a default client (none
+        # when this is the only client of the process)
+        finished = as_completed(list(futures), loop=client.loop)
         for future in finished:
             chunk = futures.pop(future)
             try:

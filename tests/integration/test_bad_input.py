@@ -208,10 +208,18 @@ def test_a_sweep_whose_first_step_fails_reports_and_writes(capsys, bending, tmp_
     assert json.loads((tmp_path / "sweep.json").read_text())["completed"] is False
 
 
+def _ignore_sigint():
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@pytest.mark.parametrize("ignored", [False, True], ids=["sigint", "sigint-ignored-by-parent"])
 @pytest.mark.parametrize("delay", [0.5, 0.85, 1.2])   # in the imports (casadi's at about 0.8 s) and after
-def test_ctrl_c_during_start_up_exits_130_with_one_line(scenarios, tmp_path, delay):
+def test_ctrl_c_during_start_up_exits_130_with_one_line(scenarios, tmp_path, delay, ignored):
+    """Also when started with SIGINT ignored, as a shell's background job is (the CLI takes
+    Ctrl-C back)."""
     process = subprocess.Popen([sys.executable, "-m", "tca_casadi.cli", "check", str(scenarios / "arm.yaml"),
-                                "-o", str(tmp_path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                                "-o", str(tmp_path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               preexec_fn=_ignore_sigint if ignored else None)
     time.sleep(delay)
     process.send_signal(signal.SIGINT)
     out, err = process.communicate(timeout=60)

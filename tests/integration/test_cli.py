@@ -71,3 +71,17 @@ def test_console_script_has_no_traceback_on_bad_file(tmp_path):
                             capture_output=True, text=True)
     assert result.returncode == 2
     assert "Traceback" not in result.stderr and "malformed YAML" in result.stderr
+
+
+def _subcommands():
+    from tca_casadi.cli import build_parser
+    action = next(a for a in build_parser()._actions if a.dest == "command")
+    return sorted(action.choices)
+
+
+@pytest.mark.parametrize("command", _subcommands())
+def test_every_subcommand_answers_help(command):
+    """``tca-casadi COMMAND --help`` in a fresh process, for every command the parser has."""
+    run = subprocess.run([sys.executable, "-m", "tca_casadi.cli", command, "--help"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.startswith(f"usage: tca-casadi {command}") and not run.stderr

@@ -1,10 +1,16 @@
 """A study on a local pool of processes and on a real Dask cluster (a scheduler and two worker
 processes on 127.0.0.1, started here): the same rows as in one process, and a worker killed in
 the middle of the study does not lose a sample."""
+import contextlib
+import json
 import multiprocessing
 import os
 import signal
+import socket
+import subprocess
+import sys
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -19,11 +25,29 @@ TEMPERATURES = ["bending.tca1.temperature", "bending.tca2.temperature", "bending
 TIP = ["tip_x [m]", "tip_y [m]", "tip_z [m]"]
 
 
+@contextlib.contextmanager
+def _port_taken(port=8787):
+    """Hold ``port`` on 127.0.0.1 (Dask's default dashboard port) if it is free, as another
+    program might: the clusters below must not depend on it."""
+    holder = socket.socket()
+    try:
+        holder.bind(("127.0.0.1", port))
+        holder.listen()
+    except OSError:                       # already taken by something else: as good
+        pass
+    try:
+        yield
+    finally:
+        holder.close()
+
+
 @pytest.fixture(scope="module")
 def cluster():
-    """A LocalCluster: its own scheduler and two single-threaded worker processes on 127.0.0.1."""
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                  dashboard_address=None, scheduler_port=0) as local:
+    """A LocalCluster: its own scheduler and two single-threaded worker processes on 127.0.0.1,
+    started while port 8787 is taken (the HTTP server on a free port: ``:0``)."""
+    with _port_taken(), distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                                 host="127.0.0.1", dashboard_address=":0",
+                                                 scheduler_port=0) as local:
         with distributed.Client(local) as client:
             client.wait_for_workers(2, timeout=60)
             yield local
@@ -100,3 +124,56 @@ def test_cli_on_the_cluster(scenarios, cluster, tmp_path, capsys):
     assert "12 samples (grid), 12 converged" in capsys.readouterr().out
     info = __import__("json").loads((tmp_path / "study.json").read_text())
     assert info["ran_on"] == f"dask: {cluster.scheduler_address}" and info["workers"] == 2
+
+
+@contextlib.contextmanager
+def _dask_command_line_cluster(directory, workers=2):
+    """A scheduler and ``workers`` single-threaded workers started by the ``dask`` command line
+    as a user would (on 127.0.0.1, free ports, while 8787 is taken); yields the address."""
+    dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
+    file = directory / "scheduler.json"
+    processes = []
+    with _port_taken():
+        try:
+            processes.append(subprocess.Popen(
+                [*dask, "--host", "127.0.0.1", "--port", "0", "--dashboard-address", ":0",
+                 "--scheduler-file", str(file)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+            deadline = time.monotonic() + 60
+            while not file.exists() and time.monotonic() < deadline:
+                time.sleep(0.1)
+            address = json.loads(file.read_text())["address"]
+            for _ in range(workers):
+                processes.append(subprocess.Popen(
+                    [sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1",
+                     "--host", "127.0.0.1", "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+            with distributed.Client(address, timeout="30s") as client:
+                client.wait_for_workers(workers, timeout=60)
+            yield address
+        finally:
+            for process in reversed(processes):
+                process.terminate()
+            for process in processes:
+                process.wait(timeout=30)
+
+
+def test_cli_in_a_fresh_process_on_a_cluster_started_by_the_dask_command(scenarios, tmp_path):
+    """The user's way: ``dask scheduler`` and two ``dask worker`` processes, then ``tca-casadi
+    study --scheduler`` in a fresh process (no default client left by any other test): the
+    rows equal the serial run's."""
+    command = [sys.executable, "-m", "tca_casadi.cli", "study", str(scenarios / "bending_module.yaml"),
+               "--vary", "bending.tca2.temperature=25:125:4", "--vary", "bending.tca3.temperature=25:125:3",
+               "--quiet", "--no-plot"]
+    serial = subprocess.run([*command, "-o", str(tmp_path / "serial")], capture_output=True, text=True)
+    assert serial.returncode == 0, serial.stderr
+    with _dask_command_line_cluster(tmp_path) as address:
+        run = subprocess.run([*command, "--scheduler", address, "-o", str(tmp_path / "dask")],
+                             capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr
+    assert "12 samples (grid), 12 converged" in run.stdout
+    info = json.loads((tmp_path / "dask" / "study.json").read_text())
+    assert info["ran_on"] == f"dask: {address}" and info["workers"] == 2
+    import pandas
+    on_dask = pandas.read_parquet(tmp_path / "dask" / "study.parquet").sort_values("sample")
+    alone = pandas.read_parquet(tmp_path / "serial" / "study.parquet").sort_values("sample")
+    assert on_dask["worker"].nunique() == 2
+    assert_allclose(on_dask[TIP].to_numpy(float), alone[TIP].to_numpy(float), rtol=0, atol=1e-12)
