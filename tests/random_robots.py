@@ -120,3 +120,66 @@ def random_muscle_robot(seed):
             else:
                 module["actuators"][k] = dict(common, kind="mckibben", type="pam", pressure=float(rng.uniform(0, 20e3)))
     return scenario
+
+
+def random_tendon_robot(seed):
+    """A random robot of the kind that exposed the curve-knot defect (issue 34, item 8): one or
+    two modules, each with full-length tendons (prescribed tension, or displacement-controlled
+    with a stiffness or a compliance, some ``tension_only`` and pushed slack) on straight,
+    helical and spline routes with several knots, TCAs over partial spans inside them, and point
+    masses inside the spans: strain jumps where actuators run through."""
+    rng = np.random.default_rng(seed + 20_000)
+    count = int(rng.integers(1, 3))
+    modules, loads = [], []
+    for k in range(count):
+        length = float(rng.uniform(0.03, 0.08))
+        diameter = float(rng.uniform(0.006, 0.012))
+        stiffness = 0.5e6 * math.pi * diameter**4 / 64
+        force = stiffness / length**2
+        config = {"name": f"m{k}", "length": length, "material": "soft",
+                  "cross_section": {"shape": "circle", "diameter": diameter}, "actuators": []}
+        if k > 0:
+            config["connector"] = {"offset": (rng.uniform(-1, 1, 3) * 0.002).tolist(), "mass": float(rng.uniform(0, 0.002))}
+        for a in range(int(rng.integers(1, 3))):
+            config["actuators"].append(_full_length_tendon(rng, f"t{a}", length, diameter, force))
+        span = sorted(rng.uniform(0.1, 0.9, 2) * length)
+        if span[1] - span[0] > 0.2 * length:
+            config["actuators"].append({"name": "tca", "kind": "tca", "type": "nylon", "temperature": float(rng.uniform(25, 90)),
+                                        "route": {"kind": "straight", "radius": float(rng.uniform(0.15, 0.35) * diameter),
+                                                  "angle": float(rng.uniform(0, 2 * math.pi)), "span": [float(v) for v in span]}})
+        for j in range(int(rng.integers(1, 3))):
+            loads.append({"name": f"m{k}_mass{j}", "kind": "mass", "module": f"m{k}",
+                          "at": float(rng.uniform(0.05, 0.95) * length), "mass": float(rng.uniform(0.02, 0.2) * force / 9.81)})
+        modules.append(config)
+    direction = rng.normal(size=3)
+    return {"name": f"tendons_{seed}",
+            "gravity": (rng.uniform(0, 9.81) * direction / np.linalg.norm(direction)).tolist(),
+            "base": {"position": [0, 0, 0], "orientation": {"axis": rng.normal(size=3).tolist(),
+                                                            "angle": float(rng.uniform(0, math.pi))}},
+            "materials": {"soft": {"youngs_modulus": float(rng.uniform(0.2e6, 1e6)), "poisson_ratio": 0.5,
+                                   "density": float(rng.uniform(1000, 1500))}},
+            "tca_types": {"nylon": TCA_TYPE}, "modules": modules, "loads": loads}
+
+
+def _full_length_tendon(rng, name, length, diameter, force):
+    """A tendon along the whole module on a random route, driven by tension or displacement."""
+    radius = float(rng.uniform(0.1, 0.35) * diameter)
+    kind = rng.choice(["straight", "helix", "curve"], p=[0.3, 0.3, 0.4])
+    if kind == "straight":
+        route = {"kind": "straight", "radius": radius, "angle": float(rng.uniform(0, 2 * math.pi))}
+    elif kind == "helix":
+        route = {"kind": "helix", "radius": radius, "turns": float(rng.choice([-1, 1]) * rng.uniform(0.2, 1.5)),
+                 "phase": float(rng.uniform(0, 2 * math.pi))}
+    else:
+        knots = int(rng.integers(4, 7))           # knots at least L / (2 knots) apart
+        gaps = rng.uniform(1, 2, knots - 1)
+        s = np.r_[0.0, np.cumsum(gaps)] / gaps.sum() * length
+        xy = rng.uniform(-1, 1, (knots, 2)) * 0.7 * radius / math.sqrt(2)     # room for the spline's swing
+        route = {"kind": "curve", "points": np.column_stack([s, xy]).tolist()}
+    tendon = {"name": name, "kind": "tendon", "route": route}
+    if rng.random() < 0.4:
+        return dict(tendon, tension=float(rng.uniform(0.05, 0.3) * force * length / max(radius, 1e-3)))
+    tendon.update(control="displacement", tension_only=bool(rng.random() < 0.7),
+                  displacement=float(rng.uniform(-0.02, 0.01) * length))
+    stiffness = float(rng.uniform(10, 1000))
+    return dict(tendon, **({"stiffness": stiffness} if rng.random() < 0.5 else {"compliance": 1 / stiffness}))

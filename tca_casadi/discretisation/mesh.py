@@ -61,12 +61,13 @@ class ModuleMesh:
 
 
 def module_breakpoints(robot, index):
-    """Sorted arc lengths [m] where the solution may jump in strain: anchors, loads, contact
-    candidates, ends."""
+    """Sorted arc lengths [m] where the solution may jump in strain (anchors, loads, contact
+    candidates, ends) or lose smoothness (a curve route's knots)."""
     module = robot.modules[index]
     points = {0.0, module.length}
     for actuator in module.actuators:
         points.update(actuator.route.span)
+        points.update(actuator.route.smoothness_breaks)
     for load in robot.point_loads:
         if load.module == index:
             points.add(load.s)

@@ -39,6 +39,17 @@ class RouteGeometry:
             cache[key] = values
         return cache[key]
 
+    @property
+    def smoothness_breaks(self):
+        """Arc lengths [m] inside the span where the route is less smooth than elsewhere: a
+        curve's knots, where its cubic spline's third derivative jumps (so do the strains'
+        derivatives, through ``r''`` in the actuator's load). The meshes put breakpoints there:
+        an interval across a knot loses the collocation's order (and global balance with it)."""
+        if self.kind != "curve":
+            return ()
+        s_a, s_b = self.span
+        return tuple(k for k in self.params["knots"] if s_a < k < s_b)
+
     def samples(self, count=200):
         """``r`` at ``count`` points across the span, shape (3, count)."""
         return self.evaluate(np.linspace(*self.span, count))[0]
