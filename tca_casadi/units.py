@@ -84,14 +84,35 @@ def to_si(value, kind):
             raise ValueError(f"{shorten(value)} is too large") from None
     elif isinstance(value, str):
         number = _parse_string(value, si_unit, name)
+        if kind == "angle" and _bare(value):
+            _check_bare_angle(number)
     else:
         raise ValueError(f"expected {name} (a number or a string like '45 mm'), got {shorten(value)}")
     if not math.isfinite(number):
         raise ValueError(f"expected a finite number, got {shorten(value)}")
+    if kind == "angle" and isinstance(value, (int, float)):
+        _check_bare_angle(number)
     if abs(number) > MAX_MAGNITUDE:
         raise ValueError(f"{shorten(value)} is out of range: |value| must be at most "
                          f"{MAX_MAGNITUDE:g} {si_unit or ''}".rstrip())
     return number
+
+
+#: a bare number (no unit) for an angle is radians; beyond a full turn it is refused as a likely
+#: angle in degrees ("30" meant as 30 deg would be 30 rad = 1719 deg)
+BARE_ANGLE_LIMIT = 2 * math.pi
+
+
+def _bare(text):
+    match = _NUMBER_AND_UNIT.fullmatch(text.strip())
+    return bool(match) and not match.group(2)
+
+
+def _check_bare_angle(number):
+    if math.isfinite(number) and abs(number) > BARE_ANGLE_LIMIT + 1e-9:
+        raise ValueError(f"a bare number is an angle in radians: {number:g} would be {number:g} rad = "
+                         f"{math.degrees(number):.6g} deg, more than a full turn; write '{number:g} deg' "
+                         f"for degrees, or '{number:g} rad' if you mean radians")
 
 
 def _parse_string(text, si_unit, name):

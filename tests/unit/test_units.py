@@ -23,3 +23,25 @@ def test_to_si_converts(value, kind, expected):
 def test_to_si_rejects(value, kind, fragment):
     with pytest.raises(ValueError, match=fragment):
         to_si(value, kind)
+
+
+@pytest.mark.parametrize("value", [30, 30.0, "30", " -7 ", 1e3])
+def test_a_bare_angle_beyond_a_full_turn_is_refused_with_both_readings(value):
+    with pytest.raises(ValueError) as error:
+        to_si(value, "angle")
+    text = str(error.value)
+    assert "rad" in text and "deg" in text and "\n" not in text
+
+
+@pytest.mark.parametrize("value, expected", [(6.28, 6.28), (-6.28, -6.28), ("30 deg", math.radians(30)),
+                                             ("30 rad", 30.0), ("720 deg", 4 * math.pi), (2 * math.pi, 2 * math.pi)])
+def test_angles_with_a_unit_or_within_a_turn_are_read(value, expected):
+    assert to_si(value, "angle") == pytest.approx(expected, rel=1e-15)
+
+
+def test_a_bare_route_angle_in_degrees_is_refused_from_the_command_line(capsys, scenarios):
+    from tca_casadi.cli import main
+    code = main(["validate", str(scenarios / "bending_module.yaml"), "--set", "bending.tca1.route.angle=30"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1
+    assert "bending.tca1.route.angle" in err and "1718.87 deg" in err and "'30 deg'" in err
