@@ -24,7 +24,30 @@ def load_scenario(source, overrides=()):
     raw = apply_overrides(raw, overrides, sources)
     _anchor_law_folders(raw, sources)
     scenario = validate(raw, sources)
+    check_steps(scenario)
     return scenario
+
+
+def check_steps(scenario):
+    """Every sequence step's and timeline event's ``set:`` applied in order (cumulatively, as
+    ``sequence`` and ``simulate`` apply them) on top of the scenario: each path must name a
+    value and the scenario each step gives must be valid. One-line errors say which step, the
+    file line and the path, with the closest valid name (as ``--set``)."""
+    raw, sources, problems = scenario._raw, scenario._sources, []
+    for key, items in (("sequence", scenario.sequence or []), ("timeline", scenario.timeline)):
+        current, origins = raw, copy.deepcopy(sources)
+        for k, item in enumerate(items):
+            name = f"{key}[{item.name}]" if key == "sequence" else f"{key}[{k}] (at {item.at:g} s)"
+            label = f"{origins.where((key, k, 'set'))}: {name}: set"
+            try:
+                after = apply_overrides(current, item.set, origins, label=label)
+                validate(after, origins)
+            except ScenarioError as exc:       # said; the later steps go on from the step before
+                problems.extend(str(exc).splitlines())
+                continue
+            current = after
+    if problems:
+        raise ScenarioError("\n".join(problems))
 
 
 def _anchor_law_folders(raw, sources):

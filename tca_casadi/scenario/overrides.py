@@ -25,15 +25,21 @@ def parse_override(text):
     return path.strip(), parsed
 
 
-def apply_overrides(raw, overrides, sources=None):
-    """A copy of ``raw`` with every override applied; records their origin in ``sources``."""
+def apply_overrides(raw, overrides, sources=None, label="--set"):
+    """A copy of ``raw`` with every override applied; records their origin in ``sources`` as
+    ``LABEL PATH`` (``label``: where the overrides come from, e.g. a timeline event)."""
     items = overrides.items() if isinstance(overrides, dict) else [parse_override(o) for o in overrides]
     raw = copy.deepcopy(raw)
     for path, value in items:
-        key_path = resolve(raw, path)
+        try:
+            key_path = resolve(raw, path)
+        except ScenarioError as exc:
+            if label == "--set":
+                raise
+            raise ScenarioError(f"{label} {str(exc).removeprefix('--set ')}") from None
         _assign(raw, key_path, value)
         if sources is not None:
-            sources.overridden[key_path] = f"--set {path}"
+            sources.overridden[key_path] = f"{label} {path}"
     return raw
 
 

@@ -49,6 +49,9 @@ def did_you_mean(word, options, none="; none are defined", listing="; known: "):
     reasonable length), else ``none``."""
     options = [str(o) for o in options]
     match = difflib.get_close_matches(str(word), options, n=1, cutoff=0.5)
+    if not match:                          # the same name in other letter case ('BENDING')
+        folded = {o.casefold(): o for o in options}
+        match = [folded[m] for m in difflib.get_close_matches(str(word).casefold(), list(folded), n=1, cutoff=0.5)]
     if match:
         return f" (did you mean {match[0]!r}?)"
     if not options:

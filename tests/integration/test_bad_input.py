@@ -225,3 +225,34 @@ def test_ctrl_c_during_start_up_exits_130_with_one_line(scenarios, tmp_path, del
     out, err = process.communicate(timeout=60)
     assert process.returncode == 130, err
     assert err.strip().splitlines()[-1].startswith("interrupted") and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize("setting, words", [
+    ("timeline=[{at: 1 s, set: {BENDING.TCA2.DRIVE.VALUE: 0.5 W}}]",
+     ["timeline[0] (at 1 s): set BENDING.TCA2.DRIVE.VALUE", "(did you mean 'bending'?)"]),
+    ("timeline=[{at: 1 s, set: {bending.tca2.drive.valu: 0.5 W}}]",
+     ["timeline[0] (at 1 s): set bending.tca2.drive.valu", "unknown key 'valu' (did you mean 'value'?)"]),
+    ("timeline=[{at: 1 s, set: {bending.tca2.drive.value: 0.5 W}}, {at: 2 s, set: {bending.tca9.temperature: 50}}]",
+     ["timeline[1] (at 2 s): set bending.tca9.temperature", "no actuator or key 'tca9'"]),
+    ("sequence=[{name: heat, set: {bending.tca2.temprature: 90}}]",
+     ["sequence[heat]: set bending.tca2.temprature", "(did you mean 'temperature'?)"]),
+    ("sequence=[{name: heat, set: {bending.tca2.temperature: 900}}]",
+     ["sequence[heat]: set bending.tca2.temperature", "above the TCA type's max_temperature"]),
+])
+def test_validate_checks_timeline_and_sequence_paths_when_reading(capsys, bending, setting, words):
+    """``validate`` reads every timeline event's and sequence step's paths (applied in order,
+    as simulate and sequence apply them) with the same "did you mean" as ``--set``."""
+    drive = "bending.tca2.drive={kind: power, value: 0}"
+    code, _, err = run(capsys, "validate", bending, "--set", drive, "--set", "duration=10", "--set", setting)
+    line = one_error_line(err)
+    assert code == 2
+    assert all(word in line for word in words), line
+
+
+def test_every_bad_step_is_listed(capsys, bending):
+    code, _, err = run(capsys, "validate", bending, "--set",
+                       "sequence=[{name: a, set: {bending.tca2.temprature: 90}}, {name: b, set: {bending.tca3.temperature: 90}},"
+                       " {name: c, set: {bendin.tca1.temperature: 30}}]")
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 2, err
+    assert "sequence[a]" in lines[0] and "sequence[c]" in lines[1] and "(did you mean 'bending'?)" in lines[1]
