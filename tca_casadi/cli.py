@@ -22,6 +22,9 @@ def _scenario_arguments(parser):
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
                         help="override a scenario value by dotted path, e.g. bending.tca2.temperature=100 "
                              "(repeatable)")
+    parser.add_argument("--allow-code", action="store_true",
+                        help="run the Python module that a custom muscle law's entry_point names (a scenario "
+                             "with one is refused without this; allow only code you trust)")
 
 
 def _output_arguments(parser, default, plots):
@@ -230,7 +233,7 @@ def _exit_interrupted():
 def _validate(args):
     from .model import Robot
     from .scenario import load_scenario
-    scenario = load_scenario(Path(args.scenario), args.overrides)
+    scenario = load_scenario(Path(args.scenario), args.overrides, allow_code=args.allow_code)
     robot = Robot.from_scenario(scenario)
     print(f"{args.scenario}: valid scenario {scenario.name!r}: {len(robot.modules)} module(s), "
           f"{len(robot.tcas)} TCA(s), {_other_muscles(robot)}"
@@ -289,7 +292,7 @@ def _print_thermal(scenario, robot):
 
 def _solve(args):
     from .simulation import Simulation
-    sim = Simulation.from_file(Path(args.scenario), args.overrides, method=args.method)
+    sim = Simulation.from_file(Path(args.scenario), args.overrides, method=args.method, allow_code=args.allow_code)
     output = prepare_directory(args.output or default_directory(sim.scenario.name),
                                ["solution.json", "arrays.npz", "robot.png"],
                                stale=["robot.png"] if args.no_plot else [])
@@ -312,7 +315,7 @@ def _solve(args):
 def _check(args):
     from .simulation import Simulation
     from .studies import check
-    sim = Simulation.from_file(Path(args.scenario), args.overrides)
+    sim = Simulation.from_file(Path(args.scenario), args.overrides, allow_code=args.allow_code)
     output = prepare_directory(args.output or default_directory(sim.scenario.name), ["check.json"])
     report, _, _ = check(sim, args.position_tolerance, args.tension_tolerance)
     path = report.save(output / "check.json")
@@ -327,7 +330,7 @@ def _check(args):
 def _sweep(args):
     from .simulation import Simulation
     from .studies import Sweep
-    sim = Simulation.from_file(Path(args.scenario), args.overrides)
+    sim = Simulation.from_file(Path(args.scenario), args.overrides, allow_code=args.allow_code)
     sweep = Sweep(sim, args.params, _number(args.start), _number(args.stop), args.steps,
                   arclength=args.arclength, min_step=args.min_step)
     plots = ["sweep.png", "sweep_robots.png"]
@@ -344,7 +347,7 @@ def _inverse(args):
     from .simulation import Simulation
     from .studies.inverse import InverseStatics, Target, read_targets, write_path_results
     from .units import to_si
-    sim = Simulation.from_file(Path(args.scenario), args.overrides)
+    sim = Simulation.from_file(Path(args.scenario), args.overrides, allow_code=args.allow_code)
     tolerance = None
     if args.tolerance is not None:
         try:
@@ -385,7 +388,7 @@ def _sequence(args):
     from .plotting.animation import save_animation, save_step_pngs
     from .simulation import Simulation
     from .studies.sequence import run_sequence
-    sim = Simulation.from_file(Path(args.scenario), args.overrides)
+    sim = Simulation.from_file(Path(args.scenario), args.overrides, allow_code=args.allow_code)
     frames = 0 if args.no_animation else max(args.frames, 0)
     stale = ["step_*.png"] + (["sequence.gif", "sequence.mp4"] if args.no_animation else []) + \
         ([] if args.check else ["sequence_check.json"])
@@ -437,7 +440,7 @@ def _simulate(args):
     from .simulation import Simulation
     from .studies.timeline import TimeSimulation
     from .units import to_si
-    sim = Simulation.from_file(Path(args.scenario), args.overrides)
+    sim = Simulation.from_file(Path(args.scenario), args.overrides, allow_code=args.allow_code)
     try:
         duration = None if args.duration is None else to_si(args.duration, "time")
         dt = to_si(args.dt, "time")
@@ -469,7 +472,7 @@ def _simulate(args):
 def _study(args):
     from .simulation import Simulation
     from .studies.study import Study
-    sim = Simulation.from_file(Path(args.scenario), args.overrides)
+    sim = Simulation.from_file(Path(args.scenario), args.overrides, allow_code=args.allow_code)
     vary = dict(_vary_spec(text, "--vary") for text in args.vary)
     for text in args.monte_carlo:
         path, spec = _vary_spec(text, "--monte-carlo")
@@ -494,7 +497,7 @@ def _fit(args):
     from .simulation import Simulation
     from .studies.fit import Fit
     from .units import to_si
-    sim = Simulation.from_file(Path(args.scenario), args.overrides)
+    sim = Simulation.from_file(Path(args.scenario), args.overrides, allow_code=args.allow_code)
     sigmas = {}
     for text in args.sigma:
         kind, sep, value = text.partition("=")

@@ -41,9 +41,11 @@ class Simulation:
         self.last = None
 
     @classmethod
-    def from_file(cls, source, overrides=(), method=None):
-        """Load (YAML path, YAML text or dict), apply ``overrides``, build the model."""
-        return cls(load_scenario(source, overrides), method=method)
+    def from_file(cls, source, overrides=(), method=None, allow_code=False):
+        """Load (YAML path, YAML text or dict), apply ``overrides``, build the model.
+        ``allow_code``: run the Python code a ``custom`` muscle law names (refused otherwise,
+        see :func:`~tca_casadi.scenario.load_scenario`)."""
+        return cls(load_scenario(source, overrides, allow_code=allow_code), method=method)
 
     # ------------------------------------------------------------------ parameters
     def set(self, path, value):
@@ -60,6 +62,7 @@ class Simulation:
             self.scenario._sources = SourceMap("<scenario>")
         raw = apply_overrides(self.scenario._raw, {path: value}, self.scenario._sources)
         scenario = validate(raw, self.scenario._sources)
+        scenario._allow_code = self.scenario._allow_code
         if self.robot.structure_key(scenario) == self.robot.structure_key(self.scenario):
             params = self.robot.parameter_vector(scenario)
             problems = self.robot.problems(params)
@@ -341,9 +344,9 @@ def _better(first, second):
     return second
 
 
-def solve(source, overrides=(), **options):
+def solve(source, overrides=(), allow_code=False, **options):
     """One call: load a scenario and solve it. Returns a :class:`Solution`."""
-    return Simulation.from_file(source, overrides).solve(**options)
+    return Simulation.from_file(source, overrides, allow_code=allow_code).solve(**options)
 
 
 __all__ = ["Simulation", "solve"]

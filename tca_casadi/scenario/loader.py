@@ -14,18 +14,41 @@ from .sources import SourceMap, clip, did_you_mean, format_path, shorten
 from .yaml_safe import parse_yaml
 
 
-def load_scenario(source, overrides=()):
+def load_scenario(source, overrides=(), allow_code=False):
     """Validated :class:`Scenario` from a YAML path, YAML text or dict, with overrides applied.
 
     ``overrides`` is a list of ``"dotted.path=value"`` strings or a ``{path: value}`` dict.
+    ``allow_code``: a scenario whose ``muscle_types`` name a ``custom`` law runs the Python
+    module its ``entry_point`` names; such a scenario is refused (before anything is imported)
+    unless this is True (the CLI's ``--allow-code``).
     Raises :class:`ScenarioError` naming file, line and key path of every problem.
     """
     raw, sources = read_raw(source)
     raw = apply_overrides(raw, overrides, sources)
     _anchor_law_folders(raw, sources)
+    if not allow_code:
+        refuse_code(raw, sources)
     scenario = validate(raw, sources)
+    scenario._allow_code = bool(allow_code)
     check_steps(scenario)
     return scenario
+
+
+def refuse_code(raw, sources):
+    """ScenarioError, one line per custom law, naming the module and file its entry point would
+    import (found without importing it), when the scenario would run Python code."""
+    from ..model.laws.custom import describe_entry_point
+    types = raw.get("muscle_types")
+    problems = []
+    for name, config in (types.items() if isinstance(types, dict) else ()):
+        if isinstance(config, dict) and config.get("kind") == "custom" and isinstance(config.get("entry_point"), str):
+            path = ("muscle_types", name, "entry_point")
+            folder = config.get("folder") if isinstance(config.get("folder"), str) else None
+            problems.append(f"{sources.where(path)}: {format_path(path, raw)}: this scenario runs Python code: "
+                            f"{describe_entry_point(config['entry_point'], folder)}; if you trust it, allow it "
+                            "with --allow-code (Python: allow_code=True)")
+    if problems:
+        raise ScenarioError("\n".join(problems))
 
 
 def check_steps(scenario):

@@ -712,3 +712,5 @@ class Scenario(Strict):
     dynamics: Dynamics = Field(default_factory=Dynamics)
     _raw: Optional[dict] = PrivateAttr(default=None)
     _sources: object = PrivateAttr(default=None)
+    #: the user allowed its custom laws' Python code (``load_scenario(allow_code=True)``)
+    _allow_code: bool = PrivateAttr(default=False)

@@ -183,7 +183,8 @@ class Study:
                 part = positions[start:start + size]
                 out.append(Chunk(key, raw, structure, meshes, degree, self.parameters,
                                  [int(i) for i in self.design.ids[part]],
-                                 self.design.values[np.ix_(part, columns)].tolist(), self.outputs))
+                                 self.design.values[np.ix_(part, columns)].tolist(), self.outputs,
+                                 self.sim.scenario._allow_code))
         return out
 
     def _mesh(self, structure):
@@ -192,7 +193,8 @@ class Study:
         key = json.dumps(structure, sort_keys=True)
         if key not in self._meshes:
             from ..simulation import Simulation
-            sim = self.sim if not structure else Simulation.from_file(self._raw(), structure)
+            sim = self.sim if not structure else Simulation.from_file(self._raw(), structure,
+                                                                      allow_code=self.sim.scenario._allow_code)
             if sim.method != "collocation":
                 self._meshes[key] = (None, None)
             else:

@@ -38,6 +38,8 @@ class Chunk:
     ids: list
     values: list
     outputs: list = field(default_factory=list)
+    #: the user allowed the scenario's custom laws' code (workers rebuild it from ``raw``)
+    allow_code: bool = False
 
 
 def solve_chunk(chunk, progress=None):
@@ -79,7 +81,7 @@ def _prepared(chunk):
     if chunk.key in _PREPARED:
         return _PREPARED[chunk.key]
     from ..simulation import Simulation
-    sim = Simulation.from_file(chunk.raw, chunk.structure)
+    sim = Simulation.from_file(chunk.raw, chunk.structure, allow_code=chunk.allow_code)
     if chunk.meshes is not None:
         sim.use_meshes(chunk.meshes, chunk.degree)
     _PREPARED[chunk.key] = (sim, sim.params.copy())

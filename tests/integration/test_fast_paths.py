@@ -39,8 +39,8 @@ def assert_same(a, b, position=1e-9, tension=1e-8):
 def test_newton_matches_ipopt_cold_warm_and_on_a_step(path):
     """Cold, the default algorithm (newton) and ``solver.algorithm: ipopt`` agree; after a nudge,
     one Newton step equals IPOPT's from the same start; and so do the two warm solves."""
-    by_ipopt = Simulation.from_file(path, ["solver.algorithm=ipopt"])
-    fast = Simulation.from_file(path)                      # newton is the default
+    by_ipopt = Simulation.from_file(path, ["solver.algorithm=ipopt"], allow_code=True)
+    fast = Simulation.from_file(path, allow_code=True)                    # newton is the default
     assert fast.scenario.solver.algorithm == "newton"
     start = fast.solve()
     assert_same(by_ipopt.solve(), start)

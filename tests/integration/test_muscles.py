@@ -197,7 +197,7 @@ def test_a_user_law_reproduces_the_built_in_mckibben_law(tmp_path):
     custom = custom.replace("kind: mckibben,", "kind: custom,").replace('pressure: "200 kPa"', "input: 2e5")
     custom = custom.replace("pressure: 0", "input: 0")
     (tmp_path / "custom.yaml").write_text(custom)
-    solution = tc.Simulation.from_file(tmp_path / "custom.yaml").solve()
+    solution = tc.Simulation.from_file(tmp_path / "custom.yaml", allow_code=True).solve()
     assert solution.converged
     assert_allclose(solution.tip_position, built_in.tip_position, rtol=0, atol=1e-11)
     for k in ("pam1", "pam2", "pam3"):       # atol: the slack muscles' smoothing residue (~1e-8 N)
@@ -207,7 +207,7 @@ def test_a_user_law_reproduces_the_built_in_mckibben_law(tmp_path):
 
 def test_the_shipped_user_law_against_its_closed_form():
     """linear_muscle: F = k (delta + g u l*) on each muscle, at the solved stroke."""
-    solution = tc.Simulation.from_file("scenarios/bending_module_custom.yaml").solve()
+    solution = tc.Simulation.from_file("scenarios/bending_module_custom.yaml", allow_code=True).solve()
     for key, u in (("bending.m1", 1.0), ("bending.m2", 0.0)):
         a = solution.actuators[key]
         assert_allclose(a.tension, 200.0 * (a.stroke + 0.05 * u * a.reference_length), rtol=1e-9, atol=1e-12)
@@ -222,7 +222,8 @@ def test_collocation_and_shooting_agree_on_the_example_robots(scenario, setting)
                  "bending_module_mckibben": {"low": ["segment.pam1.pressure=20 kPa"],
                                              "high": ["segment.pam1.pressure=400 kPa", "segment.pam2.pressure=100 kPa"]},
                  "bending_module_custom": {"low": ["bending.m1.input=0.1"], "high": ["bending.m2.input=2"]}}
-    sim = tc.Simulation.from_file(f"scenarios/{scenario}.yaml", overrides[scenario].get(setting, []))
+    sim = tc.Simulation.from_file(f"scenarios/{scenario}.yaml", overrides[scenario].get(setting, []),
+                                 allow_code=scenario == "bending_module_custom")
     report, collocation, shooting = check(sim)
     assert collocation.converged and shooting.converged
     assert_allclose(collocation.tip_position, shooting.tip_position, rtol=0, atol=1e-6)
@@ -285,7 +286,8 @@ def test_an_sma_wire_s_thermal_constants_fit_from_its_heating_curve():
 def test_bad_muscle_input_is_one_line_exit_2(capsys, scenario, override, message):
     from tca_casadi import cli
     overrides = [override] if isinstance(override, str) else override
-    code = cli.main(["solve", f"scenarios/bending_module_{scenario}.yaml", "--no-plot", "-o", "/nonexistent-never-written"]
+    code = cli.main(["solve", f"scenarios/bending_module_{scenario}.yaml", "--no-plot", "-o", "/nonexistent-never-written",
+                     "--allow-code"]
                     + [word for o in overrides for word in ("--set", o)])
     err = capsys.readouterr().err
     assert code == 2
@@ -304,7 +306,7 @@ def test_an_entry_point_that_builds_no_scalar_expression_is_refused(tmp_path, ca
     text = text.replace('"muscle_laws:linear_muscle", parameters: {stiffness: 200.0, gain: 0.05}',
                         f'"my_laws:{function}", parameters: {{}}')
     (tmp_path / "bad.yaml").write_text(text)
-    code = cli.main(["solve", str(tmp_path / "bad.yaml"), "--no-plot", "-o", str(tmp_path / "out")])
+    code = cli.main(["solve", str(tmp_path / "bad.yaml"), "--no-plot", "-o", str(tmp_path / "out"), "--allow-code"])
     err = capsys.readouterr().err
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1, err
     assert not (tmp_path / "out").exists()
@@ -348,7 +350,7 @@ def test_a_user_law_travels_to_study_workers(tmp_path, capsys):
     from tca_casadi import cli
     code = cli.main(["study", str(Path("scenarios/bending_module_custom.yaml").resolve()),
                      "--vary", "bending.m1.input=0:2:3", "--vary", "bending.m2.input=0:2:2", "--workers", "2",
-                     "--no-plot", "--quiet", "-o", str(tmp_path / "study")])
+                     "--no-plot", "--quiet", "-o", str(tmp_path / "study"), "--allow-code"])
     assert code == 0, capsys.readouterr().err
     import json
     report = json.loads((tmp_path / "study" / "study.json").read_text())
@@ -367,3 +369,60 @@ def test_a_monte_carlo_over_sma_constants_converges_everywhere(tmp_path, capsys)
     import json
     report = json.loads((tmp_path / "mc" / "study.json").read_text())
     assert report["converged"] == 12, report
+
+
+# ----------------------------------------------------------------------------- code is opt-in
+MARKER_LAW = """
+import pathlib
+pathlib.Path(__file__).with_name("ran.txt").write_text("imported")
+
+
+def linear_muscle(stroke, force, input, reference_length, stiffness, gain):
+    return force - stiffness * (stroke + gain * input * reference_length)
+"""
+
+
+def _dropped_law_scenario(tmp_path):
+    """The shipped custom scenario beside a law module that leaves a file behind when imported."""
+    (tmp_path / "muscle_laws.py").write_text(MARKER_LAW)
+    (tmp_path / "robot.yaml").write_text(Path("scenarios/bending_module_custom.yaml").read_text())
+    return tmp_path / "robot.yaml"
+
+
+@pytest.mark.parametrize("command", ["validate", "solve", "check"])
+def test_a_scenario_that_would_run_code_is_refused_without_importing_it(tmp_path, command):
+    """In a fresh process, as a user opening someone else's scenario: one line naming the module
+    and the file it would import, exit 2, and the module never ran."""
+    import subprocess
+    import sys
+    scenario = _dropped_law_scenario(tmp_path)
+    output = [] if command == "validate" else ["-o", str(tmp_path / "out")]
+    run = subprocess.run([sys.executable, "-m", "tca_casadi.cli", command, str(scenario), *output],
+                         capture_output=True, text=True, cwd="/")
+    assert run.returncode == 2, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1, run.stderr
+    assert "muscle_types.linear.entry_point: this scenario runs Python code" in lines[0]
+    assert f"module 'muscle_laws' ({tmp_path / 'muscle_laws.py'})" in lines[0] and "--allow-code" in lines[0]
+    assert not (tmp_path / "ran.txt").exists() and not (tmp_path / "out").exists()
+
+
+def test_allowed_code_runs(tmp_path):
+    import subprocess
+    import sys
+    scenario = _dropped_law_scenario(tmp_path)
+    run = subprocess.run([sys.executable, "-m", "tca_casadi.cli", "validate", str(scenario), "--allow-code"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert (tmp_path / "ran.txt").read_text() == "imported"
+
+
+def test_python_callers_allow_code_explicitly(tmp_path):
+    scenario = _dropped_law_scenario(tmp_path)
+    with pytest.raises(tc.ScenarioError, match="allow_code=True"):
+        tc.Simulation.from_file(scenario)
+    with pytest.raises(tc.ScenarioError, match="runs Python code"):       # --set cannot smuggle one in
+        tc.Simulation.from_file("scenarios/bending_module_sma.yaml",
+                                ["muscle_types.mine={kind: custom, entry_point: 'muscle_laws:linear_muscle'}"])
+    assert not (tmp_path / "ran.txt").exists()
+    assert tc.Simulation.from_file(scenario, allow_code=True).solve(warn=False).converged

@@ -59,7 +59,7 @@ def test_every_parameter_name_is_a_set_path_of_the_scenario(scenarios):
     """Each layout name, given to --set with its own value, leaves the parameters unchanged and
     needs no rebuild."""
     for path in sorted(scenarios.glob("*.yaml")):
-        sim = Simulation.from_file(path)
+        sim = Simulation.from_file(path, allow_code=True)
         robot = sim.robot
         for name in sim.robot.layout.names():
             if name in history_names_of(robot):

@@ -140,7 +140,7 @@ def test_dotted_paths_in_examples_exist():
     from tca_casadi.scenario import load_scenario
     names = set()
     for path in (ROOT / "scenarios").rglob("*.yaml"):
-        scenario = load_scenario(path)
+        scenario = load_scenario(path, allow_code=True)
         names |= {m.name for m in scenario.modules} | {load.name for load in scenario.loads}
         names |= {o.name for o in scenario.objects}
     names |= {"name", "gravity", "base", "solver", "materials", "tca_types"}

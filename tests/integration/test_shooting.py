@@ -25,7 +25,7 @@ def assert_agree(report):
 
 @pytest.mark.parametrize("path", SHIPPED, ids=[p.stem for p in SHIPPED])
 def test_every_shipped_scenario_agrees(path):
-    sim = Simulation.from_file(path)
+    sim = Simulation.from_file(path, allow_code=True)
     if sim.robot.obstacles:               # contact is collocation's alone (issue 17): said, not skipped
         with pytest.raises(ScenarioError, match="shooting solver does not model contact"):
             check(sim)

@@ -135,6 +135,38 @@ def residual_function(entry_point, parameter_names, folder=None):
         raise EntryPointError(f"{entry_point}: {error}".splitlines()[0]) from None
 
 
+def describe_entry_point(entry_point, folder=None):
+    """What importing ``entry_point`` would run, found without running anything: ``"it would
+    import module 'muscle_laws' (/path/muscle_laws.py) and call linear_muscle"``. A top-level
+    module is located by ``importlib.util.find_spec`` (which executes nothing), else in
+    ``folder``."""
+    import importlib.util
+    from pathlib import Path
+    module_name, _, name = entry_point.partition(":")
+    top = module_name.split(".")[0]
+    where = None
+    try:
+        spec = importlib.util.find_spec(top) if top else None
+        where = spec.origin if spec is not None else None
+    except (ImportError, ValueError):
+        pass
+    if where is None and folder is not None:
+        for candidate in (Path(folder) / f"{top}.py", Path(folder) / top / "__init__.py"):
+            if candidate.is_file():
+                where = str(candidate)
+                break
+    found = f" ({_shown(where)})" if where else " (not found on the Python path or beside the scenario)"
+    return f"it would import module {module_name!r}{found} and call {name or '?'}"
+
+
+def _shown(path):
+    """A path relative to the working directory when it lies below it, else absolute."""
+    import os
+    here = os.getcwd()
+    relative = os.path.relpath(path, here)
+    return path if relative.startswith("..") or here == os.path.dirname(here) else relative
+
+
 def load_entry_point(entry_point, folder=None):
     """The function ``module:function`` names, imported from the Python path or ``folder``."""
     module_name, _, name = entry_point.partition(":")
