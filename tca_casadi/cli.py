@@ -424,16 +424,60 @@ def _number(text):
 
 
 def _with_progress(run, label, quiet=False):
-    """Call ``run(progress=...)`` with a rich progress bar on stderr (none if quiet or not a TTY)."""
+    """Call ``run(progress=...)`` with a rich progress bar on stderr (none if quiet or not a TTY,
+    where a long run says once, from its first steps, how long it will take: :class:`_Pace`)."""
     if quiet or not sys.stderr.isatty():
-        return run(progress=None)
+        return run(progress=_Pace(label))
     from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
     columns = (TextColumn(f"{label} "), BarColumn(), TextColumn("{task.percentage:>5.1f}%"),
-               TextColumn("{task.description}"), TimeElapsedColumn())
+               TextColumn("{task.description}"), TimeElapsedColumn(), TextColumn("left"), TimeRemainingColumn())
     with Progress(*columns, console=Console(stderr=True), transient=True) as bar:
         task = bar.add_task("", total=1.0)
         return run(progress=lambda fraction, text: bar.update(task, completed=fraction, description=text))
+
+
+class _Pace:
+    """A progress callback that, once a run has gone on for :data:`PACE_AFTER` seconds since its
+    first progress (the build and first solve left out), prints one line to stderr if at its
+    pace so far it still has more than :data:`LONG_RUN` seconds to go."""
+
+    def __init__(self, label):
+        import time
+        self.label, self.clock, self.first, self.said = label, time.perf_counter, None, False
+
+    def __call__(self, fraction, text=""):
+        if self.said:
+            return
+        now = self.clock()
+        if self.first is None:
+            self.first = (now, fraction)
+            return
+        (started, done), elapsed = self.first, now - self.first[0]
+        if elapsed < PACE_AFTER or fraction <= done:
+            return
+        self.said = True
+        left = (1.0 - fraction) * elapsed / (fraction - done)
+        if left > LONG_RUN:
+            print(f"{self.label}: {100 * fraction:.2g} % done; about {_duration(left)} to go at this pace "
+                  "(Ctrl-C stops it)", file=sys.stderr, flush=True)
+
+
+#: seconds of progress a run is timed over before it may say how long it will take ...
+PACE_AFTER = 3.0
+#: ... which it says when that is more than this [s]
+LONG_RUN = 120.0
+
+
+def _duration(seconds):
+    """``3 h 20 min``, ``12 min``, ``45 s``."""
+    if seconds >= 3600 * 48:
+        return f"{seconds / 86400:.3g} days"
+    if seconds >= 3600:
+        return f"{int(seconds // 3600)} h {int(seconds % 3600 // 60)} min"
+    if seconds >= 60:
+        return f"{int(seconds // 60)} min"
+    return f"{seconds:.0f} s"
 
 
 def _simulate(args):

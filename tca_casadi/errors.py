@@ -64,3 +64,8 @@ WARNING_KINDS = ("not_converged", "compression", "fit_range", "slack", "global_b
 class OutputError(ScenarioError):
     """Results cannot be written where asked (not a directory, not writable). Raised before any
     computing, and treated like bad input (exit code 2)."""
+
+
+class ResourceError(TcaError):
+    """A run needs more of the machine than it has (memory): said in one line with what was
+    too big and what to change (exit code 1); no result files are written."""

@@ -56,6 +56,7 @@ class FitResult:
     data_source: str
     fit: object = field(default=None, repr=False)
     profile: dict = None              # Fit.profile of one parameter, on request
+    measured_scale: float = None      # the residuals' RMS in units of sigma, even with absolute sigmas
 
     @classmethod
     def build(cls, fit, theta, optimum, before, after, J, test_residuals, wall_time):
@@ -105,6 +106,8 @@ class FitResult:
                 if np.isfinite(correlation[i, j]) and abs(correlation[i, j]) > 0.99:
                     warnings.append(f"{fit.parameters[i].path} and {fit.parameters[j].path} are correlated "
                                     f"{correlation[i, j]:+.4f}: the data hardly tell them apart")
+        measured = float(np.sqrt(float(after @ after) / dof))
+        warnings.extend(misfit_warnings(measured, dof, fit.absolute_sigma))
         q = len(data.names)
         predicted = model.predictions(theta)
         predicted_before = _nominal_predictions(fit)
@@ -115,7 +118,8 @@ class FitResult:
         return cls(parameters, covariance, correlation, condition, warnings, bool(optimum.success),
                    str(optimum.message), int(optimum.nfev), float(optimum.cost), float(np.sqrt(s2)),
                    rms, (data.values[fit.train] - predicted[fit.train]).reshape(-1, q), predicted,
-                   predicted_before, list(data.names), fit.train, fit.test, wall_time, data.source, fit)
+                   predicted_before, list(data.names), fit.train, fit.test, wall_time, data.source, fit,
+                   measured_scale=measured)
 
     # ------------------------------------------------------------------ text and files
     def summary(self):
@@ -147,7 +151,9 @@ class FitResult:
             for name, values in by_type.items():
                 if len(values) == 2:
                     lines.append(f"  tca_types.{name}: time constant C/G = {values['heat_capacity'] / values['conductance']:.4g} s")
-        lines.append(f"  residual scale {self.residual_scale:.3g} sigma; Fisher condition number {self.condition:.3g}")
+        lines.append(f"  residual scale {self.measured_scale:.3g} sigma"
+                     + (" (intervals from the sigmas as given)" if self.fit.absolute_sigma else "")
+                     + f"; Fisher condition number {self.condition:.3g}")
         if self.profile is not None:
             low, high = self.profile["interval_95"]
             wald = self.profile["wald_interval_95"]
@@ -164,6 +170,7 @@ class FitResult:
                 "measured": self.names, "parameters": [q.as_dict() for q in self.parameters],
                 "correlation": _nan_to_none(self.correlation), "covariance": _nan_to_none(self.covariance),
                 "fisher_condition_number": self.condition, "residual_scale_sigma": self.residual_scale,
+                "residual_scale_measured": self.measured_scale,
                 "rms": self.rms, "warnings": self.warnings, "profile": self.profile,
                 "residuals": [dict(zip(self.names, map(float, row)), experiment=int(k) + 1)
                               for k, row in zip(self.train, self.residuals)]}
@@ -197,6 +204,30 @@ class FitResult:
 
 def _nominal_predictions(fit):
     return fit.model.predictions(fit.nominal)
+
+
+#: a residual scale outside the central 1 - MISFIT_LEVEL of chance (chi-square) is warned about
+MISFIT_LEVEL = 1e-3
+
+
+def misfit_warnings(scale, dof, absolute_sigma):
+    """Warnings (texts) when the residuals' RMS in units of their sigmas (``scale``) is more, or
+    less, than chance allows at ``dof`` degrees of freedom if the model and the sigmas were right
+    (the chi-square test at :data:`MISFIT_LEVEL` each side)."""
+    from scipy.stats import chi2
+    high = float(np.sqrt(chi2.ppf(1 - MISFIT_LEVEL, dof) / dof))
+    low = float(np.sqrt(chi2.ppf(MISFIT_LEVEL, dof) / dof))
+    if scale > high:
+        effect = ("the intervals assume the sigmas (--absolute-sigma) and are too narrow" if absolute_sigma
+                  else "the intervals are widened by it")
+        return [f"the residuals are {scale:.3g} times their sigmas, more than chance allows ({high:.3g} at most, "
+                f"{dof} degrees of freedom): the model does not fit these data or the sigmas are too small; {effect}"]
+    if scale < low:
+        effect = ("the intervals assume the sigmas (--absolute-sigma) and are too wide" if absolute_sigma
+                  else "the intervals are narrowed by it")
+        return [f"the residuals are {scale:.3g} of their sigmas, less than chance allows ({low:.3g} at least, "
+                f"{dof} degrees of freedom): the sigmas are larger than the scatter of these data; {effect}"]
+    return []
 
 
 def _rms(fit, difference):

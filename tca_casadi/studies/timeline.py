@@ -53,6 +53,41 @@ def step_response(t, y, start, end):
     return {"change": change, "rise_time": crossing(0.9) - crossing(0.1), "settling_time": settled - float(t[0])}
 
 
+#: output times (time steps, with dynamics) a run may have at most: each is an equilibrium kept
+#: in memory and a row of timeseries.csv
+MAX_OUTPUT_TIMES = 1_000_000
+#: memory kept per output time: bytes per node of the robot's mesh (states, rotations, internal
+#: forces, actuator paths: measured 700-900 on the shipped robots) and per output
+BYTES_PER_NODE, BYTES_PER_OUTPUT = 1000, 4000
+
+
+def check_run_size(sim, duration, dt, events=0):
+    """ScenarioError (one line: the number and the limit) before a run of ``duration`` [s] at
+    ``dt`` [s] starts, when it has more output times than :data:`MAX_OUTPUT_TIMES` or they
+    would need more memory than the machine has available."""
+    from ..resources import available_memory, readable_bytes
+    count = duration / dt + 1 + 2 * events
+    what = "time steps" if sim.scenario.dynamics.enabled else "output times"
+    asked = f"--duration {duration:g} s at --dt {dt:g} s"
+    if not count <= MAX_OUTPUT_TIMES:
+        number = f"{count:,.0f}" if count < 1e12 else f"{count:.3g}"
+        raise ScenarioError(f"simulate: {asked} is {number} {what}; at most {MAX_OUTPUT_TIMES:,} are kept: "
+                            "raise --dt or shorten the duration")
+    need = count * (BYTES_PER_OUTPUT + BYTES_PER_NODE * _mesh_nodes(sim))
+    available = available_memory()
+    if available is not None and need > 0.8 * available:
+        raise ScenarioError(f"simulate: {asked} is {count:,.0f} {what} of this robot, about {readable_bytes(need)} to "
+                            f"keep, more than the {readable_bytes(available)} available: raise --dt or shorten the duration")
+
+
+def _mesh_nodes(sim):
+    """Nodes of the robot's starting mesh (before any refinement): intervals (d + 1) + 1 per module."""
+    from ..discretisation.mesh import build_mesh
+    options = sim.scenario.solver
+    return sum(len(build_mesh(sim.robot, m, options.intervals).intervals) * (options.degree + 1) + 1
+               for m in range(len(sim.robot.modules)))
+
+
 class _TemperatureDrive:
     """The default drive: the scenario's temperature, set directly."""
     kind = "temperature"
@@ -88,6 +123,7 @@ class TimeSimulation:
             raise ScenarioError(f"the timeline's last event ({max(e.at for e in events):g} s) is after the "
                                 f"duration ({self.duration:g} s)")
         self.dt = float(dt)
+        check_run_size(sim, self.duration, self.dt, len(events))
         if scenario.dynamics.enabled:
             from .motion import check_dynamics
             check_dynamics(sim, self.dt)
@@ -290,8 +326,10 @@ class TimeSimulation:
         responses = self._responses(series, reached)
         for key, entry in tcas.items():
             entry["responses"] = responses[key]
+        solved_until = float(series.t[len(series.solutions) - 1]) if series.solutions else None
         return {"completed": series.completed, "message": series.message, "duration": self.duration,
-                "dt": self.dt, "outputs": int(len(series.t)), "solved": len(series.solutions),
+                "dt": self.dt, "outputs": int(len(series.t)), "planned_outputs": int(len(series.t)),
+                "solved": len(series.solutions), "solved_until_s": solved_until,
                 "ambient_temperature": self.sim.scenario.ambient_temperature,
                 "events": [{"at": e.at, "set": {k: str(v) for k, v in e.set.items()}, "ramp": e.ramp}
                            for e in self.sim.scenario.timeline],
@@ -349,9 +387,15 @@ class TimeSimulation:
         return out
 
     def summary(self, series):
+        events = f"{len(self.sim.scenario.timeline)} event(s)"
+        if series.completed:
+            done = f"{self.duration:g} s, {len(series.t)} output times, {events}"
+        else:
+            reached = f"up to t = {series.t[len(series.solutions) - 1]:g} s" if series.solutions else "nothing"
+            done = (f"solved {reached} of {self.duration:g} s: {len(series.solutions)} of {len(series.t)} "
+                    f"output times, {events}")
         state = "completed" if series.completed else "STOPPED"
-        lines = [f"{self.sim.scenario.name}: simulate {state} ({series.message}); {self.duration:g} s, "
-                 f"{len(series.t)} output times, {len(self.sim.scenario.timeline)} event(s)"]
+        lines = [f"{self.sim.scenario.name}: simulate {state} ({series.message}); {done}"]
         report = self.report(series)
         for key, entry in report["tcas"].items():
             extra = (f", energy {entry['energy']:.4g} J, tau {entry['time_constant']:.3g} s" if "energy" in entry else "")

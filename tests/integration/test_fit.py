@@ -272,3 +272,33 @@ def test_heating_curve_column_that_is_not_a_temperature(tmp_path, capsys):
     code = main(["fit", str(HEATING), "--data", str(bad), "--param", C, "-o", str(tmp_path / "out"), "--quiet"])
     err = capsys.readouterr().err
     assert code == 2 and "column 'tip_x [mm]' of a time series" in err, err
+
+
+def test_a_fit_that_does_not_fit_says_so(sim):
+    """The README's own example (two of the four parameters that made the data): residuals 4.2
+    times their 0.1 mm sigma, which chance does not allow for 148 degrees of freedom."""
+    fit = Fit(sim, str(ROOT / "data" / "bending_module_measurements.csv"), [E, "tca_types.nylon.untwist.c1"],
+              bounds={E: ("0.05 MPa", "0.5 MPa")})
+    result = fit.run()
+    assert result.converged
+    assert 4.0 < result.measured_scale < 4.4
+    misfit = [w for w in result.warnings if "times their sigmas" in w]
+    assert len(misfit) == 1 and "the model does not fit these data or the sigmas are too small" in misfit[0]
+    assert json.loads(json.dumps(result.to_dict()))["residual_scale_measured"] == pytest.approx(result.measured_scale)
+
+
+@pytest.mark.parametrize("noise, sigma, words", [
+    (0.05e-3, 0.05e-3, None),                       # honest sigmas: no warning
+    (0.05e-3, 0.5e-3, "less than chance allows"),   # sigmas ten times the scatter
+    (0.05e-3, 0.005e-3, "more than chance allows"),  # a tenth of it
+])
+def test_the_residual_scale_is_judged_against_chance(sim, noise, sigma, words):
+    from tca_casadi.studies.fit import synthetic_measurements
+    truth = {E: 0.14e6}
+    data = synthetic_measurements(sim, truth, _temperatures(12, 3), TIP, {"length": noise}, seed=4)
+    data.sigmas[:] = sigma
+    result = Fit(sim, data, [E]).run()
+    found = [w for w in result.warnings if "chance allows" in w]
+    assert (found == []) if words is None else (len(found) == 1 and words in found[0]), result.warnings
+    absolute = Fit(sim, data, [E], absolute_sigma=True).run()
+    assert absolute.residual_scale == 1.0 and absolute.measured_scale == pytest.approx(result.measured_scale, rel=1e-6)

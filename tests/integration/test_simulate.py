@@ -162,3 +162,60 @@ def test_holding_an_object_the_gripper_is_not_on_stops_the_run(tmp_path, capsys)
     rows = (tmp_path / "timeseries.csv").read_text().strip().splitlines()
     assert len(rows) == 2 and rows[0].split(",")[-5:] == ["bar.held", "bar.x [m]", "bar.y [m]", "bar.z [m]",
                                                           "converged"]
+
+
+def test_a_run_that_stops_early_says_what_was_done(tmp_path, capsys):
+    """TCA 2 heated at 1.5 W from t = 1 s passes its max_temperature near 18 s: the summary and
+    simulation.json say how much was solved, not the planned 30 s and 301 output times."""
+    settings = ["bending.tca2.drive={kind: power, value: 0}", "duration=30",
+                "timeline=[{at: 1 s, set: {bending.tca2.drive.value: 1.5 W}}]"]
+    code = main(["simulate", BENDING, *_sets(settings), "--dt", "0.1", "-o", str(tmp_path), "--quiet",
+                 "--no-plot", "--no-animation"])
+    out = capsys.readouterr().out
+    report = json.loads((tmp_path / "simulation.json").read_text())
+    assert code == 1 and report["completed"] is False
+    assert 150 < report["solved"] < 200 and report["planned_outputs"] == 301
+    assert report["solved_until_s"] == pytest.approx(0.1 * (report["solved"] - 1), abs=1e-9)
+    assert f"solved up to t = {report['solved_until_s']:g} s of 30 s: {report['solved']} of 301 output times" in out
+    assert "max_temperature" in report["message"]
+    assert (tmp_path / "timeseries.csv").read_text().count("\n") == report["solved"] + 1
+
+
+@pytest.mark.parametrize("duration, dt, words", [
+    ("1e9", "1e-9", "is 1e+18 output times; at most 1,000,000 are kept"),
+    ("100", "1e-4", "is 1,000,001 output times; at most 1,000,000 are kept"),
+])
+def test_runs_too_large_to_keep_are_refused_before_they_start(tmp_path, capsys, duration, dt, words):
+    code = main(["simulate", BENDING, "--duration", duration, "--dt", dt, "-o", str(tmp_path), "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and words in err[0], err
+
+
+def test_a_run_beyond_the_memory_is_refused_with_the_need(tmp_path, capsys, monkeypatch):
+    from tca_casadi import resources
+    monkeypatch.setattr(resources, "available_memory", lambda: 200e6)
+    code = main(["simulate", BENDING, "--duration", "1000", "--dt", "0.01", "-o", str(tmp_path), "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err
+    assert "100,001 output times of this robot, about" in err[0] and "more than the 200 MB available" in err[0]
+
+
+def test_a_long_run_says_how_long_it_will_take(tmp_path):
+    """From its first steps, in a fresh process without a terminal: one line with the time to
+    go (the run is then interrupted)."""
+    import signal
+    import subprocess
+    import sys
+    import time
+    process = subprocess.Popen([sys.executable, "-m", "tca_casadi.cli", "simulate", BENDING,
+                                "--set", "dynamics={enabled: true}", "--duration", "400",
+                                "--dt", "0.002", "-o", str(tmp_path), "--no-plot", "--no-animation"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline, line = time.monotonic() + 120, ""
+    while time.monotonic() < deadline and "to go" not in line:
+        line = process.stderr.readline()
+        if not line and process.poll() is not None:
+            break
+    process.send_signal(signal.SIGINT)
+    process.communicate(timeout=60)
+    assert line.startswith("simulate: ") and "% done; about " in line and "to go at this pace" in line, line

@@ -1,0 +1,49 @@
+"""What a run needs of the machine: the memory available, sizes refused before a run starts,
+and running out of memory turned into one line that says what was too big and what to change."""
+import os
+from contextlib import contextmanager
+
+from .errors import ResourceError
+
+
+def available_memory():
+    """Bytes of memory available to a new allocation (Linux ``MemAvailable``; else the physical
+    memory), or None when unknown."""
+    try:
+        with open("/proc/meminfo") as handle:
+            for line in handle:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def readable_bytes(count):
+    """``1.5 GB``, ``320 MB``, ``12 kB``."""
+    for unit, size in (("TB", 1e12), ("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if count >= size:
+            return f"{count / size:.3g} {unit}"
+    return f"{int(count)} B"
+
+
+def is_out_of_memory(error):
+    """True for Python's MemoryError (numpy's ArrayMemoryError included) and for a C++
+    ``std::bad_alloc`` that CasADi passes on as a RuntimeError."""
+    return isinstance(error, MemoryError) or (isinstance(error, RuntimeError) and "bad_alloc" in str(error))
+
+
+@contextmanager
+def memory_guard(what, advice):
+    """Run the block; if it runs out of memory, raise :class:`ResourceError` ``"out of memory
+    while {what}; {advice}"`` instead (one line)."""
+    try:
+        yield
+    except (MemoryError, RuntimeError) as error:
+        if not is_out_of_memory(error):
+            raise
+        raise ResourceError(f"out of memory while {what} ({readable_bytes(available_memory() or 0)} available); "
+                            f"{advice}") from None
