@@ -56,5 +56,10 @@ def did_you_mean(word, options, none="; none are defined", listing="; known: "):
         return f" (did you mean {match[0]!r}?)"
     if not options:
         return none
-    shown = ", ".join(sorted(options)[:20]) + (", ..." if len(options) > 20 else "")
+    shown, names = "", sorted(options)
+    for k, name in enumerate(names):         # as many as fit in about 160 characters
+        if len(shown) + len(name) > 160:
+            shown += f", ... ({len(names)} in all)"
+            break
+        shown += (", " if k else "") + name
     return f"{listing}{shown}"

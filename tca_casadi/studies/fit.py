@@ -25,7 +25,6 @@ information; when its condition number exceeds :data:`CONDITION_LIMIT` the param
 large share in its weakest direction cannot be told apart from the data: they are named, and
 the parameters in an exactly singular direction get no interval at all.
 """
-import csv
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -75,26 +74,22 @@ class Measurements:
 
 
 def read_measurements(path, robot, params, sigmas=None):
-    """:class:`Measurements` of a CSV (module docstring); one-line ScenarioErrors naming the
-    column or row for a column that is neither, a unit that does not match, a value that is
-    not a number."""
-    path = Path(path)
-    if not path.is_file():
-        raise ScenarioError(f"fit --data: {path} is not a file")
-    with open(path, newline="") as stream:
-        rows = list(csv.reader(line for line in stream if line.strip() and not line.lstrip().startswith("#")))
-    if len(rows) < 2:
+    """:class:`Measurements` of a CSV (module docstring; read by :func:`tca_casadi.tables.read_table`);
+    one-line ScenarioErrors naming the column or line for a column that is neither, a unit that
+    does not match, a value that is not a finite number."""
+    from ..tables import read_table
+    table = read_table(path, "fit --data", "measurements file")
+    if not table.rows:
         raise ScenarioError(f"fit --data: {path} has no experiments (a header row and one row per experiment)")
-    header, records = rows[0], rows[1:]
     defaults = dict(DEFAULT_SIGMAS, **(sigmas or {}))
     inputs, input_columns, measured, measured_columns, sigma_columns = [], [], [], [], {}
-    for column, text in enumerate(header):
+    for column, text in enumerate(table.header):
         name, unit = _split_unit(text)
         if name.startswith("sigma_"):
-            sigma_columns[name[len("sigma_"):]] = (column, unit, text)
+            sigma_columns[name[len("sigma_"):]] = (column, unit)
         elif quantity_kind(robot, name) is not None:
             measured.append(name)
-            measured_columns.append((column, unit, text))
+            measured_columns.append((column, unit))
         else:
             try:
                 parameter = resolve_parameter(robot, params, name)
@@ -102,34 +97,31 @@ def read_measurements(path, robot, params, sigmas=None):
                 raise ScenarioError(f"fit --data: column {text!r} is neither a scenario parameter nor a measured "
                                     f"quantity{closest(name, measurable_names(robot) + robot.layout.names())}") from None
             inputs.append(parameter)
-            input_columns.append((column, unit, text))
+            input_columns.append((column, unit))
     if not measured:
         raise ScenarioError(f"fit --data: {path} has no measured column (e.g. tip_x [m]; measurable: "
                             f"{', '.join(measurable_names(robot)[:8])}, ...)")
     for name in sigma_columns:
         if name not in measured:
             raise ScenarioError(f"fit --data: column sigma_{name} has no measured column {name}")
-    n = len(records)
-    for number, record in enumerate(records, start=2):
-        if len(record) != len(header):
-            raise ScenarioError(f"fit --data: {path} row {number} has {len(record)} values for {len(header)} columns")
+    n = len(table.rows)
     values = np.empty((n, len(measured)))
     spread = np.empty((n, len(measured)))
-    for j, ((column, unit, text), name) in enumerate(zip(measured_columns, measured)):
+    for j, ((column, unit), name) in enumerate(zip(measured_columns, measured)):
         kind = quantity_kind(robot, name)
-        values[:, j] = [_number(record[column], unit, kind, text, row) for row, record in enumerate(records, start=2)]
+        values[:, j] = [_number(table, k, column, unit, kind) for k in range(n)]
         if name in sigma_columns:
-            s_column, s_unit, s_text = sigma_columns[name]
-            spread[:, j] = [_number(record[s_column], s_unit, kind, s_text, row) for row, record in enumerate(records, start=2)]
+            s_column, s_unit = sigma_columns[name]
+            spread[:, j] = [_number(table, k, s_column, s_unit, kind) for k in range(n)]
         else:
             spread[:, j] = defaults[kind]
         bad = np.flatnonzero(~(spread[:, j] > 0))
         if bad.size:
-            raise ScenarioError(f"fit --data: row {bad[0] + 2}: sigma of {name} is {spread[bad[0], j]:g}; give sigma > 0")
+            raise ScenarioError(f"{table.where(int(bad[0]))}: sigma of {name} is {spread[bad[0], j]:g}; give sigma > 0")
     given = np.empty((n, len(inputs)))
-    for j, ((column, unit, text), parameter) in enumerate(zip(input_columns, inputs)):
-        for row, record in enumerate(records, start=2):
-            given[row - 2, j] = _input(record[column], unit, parameter, text, row)
+    for j, ((column, unit), parameter) in enumerate(zip(input_columns, inputs)):
+        for k in range(n):
+            given[k, j] = _input(table, k, column, unit, parameter)
     return Measurements(inputs, given, measured, values, spread, str(path))
 
 
@@ -141,36 +133,25 @@ def _split_unit(text):
     return text, None
 
 
-def _cell(cell, column, row):
-    """A cell's number; one-line errors naming row and column."""
-    try:
-        value = float(cell)
-    except ValueError:
-        raise ScenarioError(f"fit --data: row {row}, column {column!r}: {cell!r} is not a number") from None
-    if not np.isfinite(value):
-        raise ScenarioError(f"fit --data: row {row}, column {column!r}: {cell!r} is not a number (NaN rows are not allowed)")
-    return value
-
-
-def _number(cell, unit, kind, column, row):
-    """A measured value in SI (m or N) from a cell and its column's unit."""
-    value = _cell(cell, column, row)
+def _number(table, k, column, unit, kind):
+    """A measured value in SI (m or N) from row ``k``, ``column`` of ``table`` and the column's unit."""
+    value = table.number(k, column)
     if unit is None:
         return value
     try:
         return float(ureg.Quantity(value, unit).to(SI_UNITS[kind]).magnitude)
     except Exception:                           # pint: undefined unit or wrong dimension
-        raise ScenarioError(f"fit --data: column {column!r}: [{unit}] is not a unit of {kind} "
+        raise ScenarioError(f"fit --data: column {table.header[column]!r}: [{unit}] is not a unit of {kind} "
                             f"({SI_UNITS[kind]})") from None
 
 
-def _input(cell, unit, parameter, column, row):
-    """An input value in its parameter's unit from a cell and its column's unit."""
-    value = _cell(cell, column, row)
+def _input(table, k, column, unit, parameter):
+    """An input value in its parameter's unit from row ``k``, ``column`` of ``table``."""
+    value = table.number(k, column)
     if unit is None:
         return value
     try:
-        return float(parameter.to_si(f"{value!r} {unit}", f"column {column!r}"))
+        return float(parameter.to_si(f"{value!r} {unit}", f"column {table.header[column]!r}"))
     except ScenarioError as exc:
         raise ScenarioError(f"fit --data: {exc}") from None
 

@@ -296,16 +296,16 @@ class _Stream:
         if self.path is None:
             return
         if resume and self.path.exists():
-            lines = self.path.read_text().splitlines()
-            header = json.loads(lines[0]) if lines else {}
+            from ..tables import read_json_lines
+            records = read_json_lines(self.path, "study --resume")
+            header = records[0] if records and isinstance(records[0], dict) else {}
             if header.get("plan") != digest:
-                raise ScenarioError(f"--resume: {self.path} holds rows of another study (its plan differs); "
+                raise ScenarioError(f"study --resume: {self.path} holds rows of another study (its plan differs); "
                                     "run without --resume to start again")
-            for line in lines[1:]:
-                try:
-                    row = json.loads(line)
-                except json.JSONDecodeError:          # the last line of a run killed mid-write
-                    continue
+            for row in records[1:]:
+                if not isinstance(row, dict) or not isinstance(row.get("sample"), int):
+                    raise ScenarioError(f"study --resume: {self.path}: a row without its sample number; the file "
+                                        "is damaged (delete it, or run without --resume)")
                 self.rows[row["sample"]] = row
         else:
             self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -369,29 +369,10 @@ def _difference(study, path, value):
 
 def read_rows(path):
     """``{PATH: values}`` from a CSV whose header names scenario paths (``[unit]`` suffixes are
-    dropped: the values are in the path's unit)."""
-    import csv
-    path = Path(path)
-    if not path.is_file():
-        raise ScenarioError(f"study --rows: {path} is not a file")
-    with open(path, newline="") as stream:
-        reader = csv.reader(line for line in stream if not line.startswith("#"))
-        header = next(reader, None)
-        if not header:
-            raise ScenarioError(f"study --rows: {path} has no header row")
-        names = [h.split("[")[0].strip() for h in header]
-        table = {name: [] for name in names}
-        for number, record in enumerate(reader, start=2):
-            if len(record) != len(names):
-                raise ScenarioError(f"study --rows: {path} line {number} has {len(record)} values for "
-                                    f"{len(names)} columns")
-            for name, text in zip(names, record):
-                try:
-                    table[name].append(float(text))
-                except ValueError:
-                    raise ScenarioError(f"study --rows: {path} line {number}, column {name}: "
-                                        f"{text!r} is not a number") from None
-    return table
+    dropped: the values are in the path's unit); read by :func:`tca_casadi.tables.read_table`."""
+    from ..tables import name_of, read_table
+    table = read_table(path, "study --rows", "samples file")
+    return {name_of(name): table.column(k) for k, name in enumerate(table.header)}
 
 
 __all__ = ["Study", "read_rows", "solve_chunk"]

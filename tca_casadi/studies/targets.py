@@ -79,35 +79,26 @@ class TargetLayout:
 
 def read_targets(path, point="tip"):
     """Targets from a CSV with columns x, y, z [m] and optionally dx, dy, dz (a direction) or
-    qw, qx, qy, qz (an orientation); header names may carry units (``x [m]``)."""
-    import csv
-    from pathlib import Path
-    try:
-        handle = Path(path).open(newline="")
-    except OSError as exc:
-        raise ScenarioError(f"cannot read the target path {path}: {exc.strerror}") from None
-    with handle:
-        reader = csv.DictReader(handle)
-        columns = {name.split("[")[0].strip().lower(): name for name in (reader.fieldnames or [])}
-        if not {"x", "y", "z"} <= set(columns):
-            raise ScenarioError(f"{path}: the target path needs columns x, y, z [m]; found {reader.fieldnames}")
-        targets = []
-        for line, row in enumerate(reader, start=2):
-            try:
-                targets.append(Target.create(_take(row, columns, "xyz"), _take(row, columns, ("dx", "dy", "dz")),
-                                             _take(row, columns, ("qw", "qx", "qy", "qz")), point))
-            except ScenarioError as exc:
-                raise ScenarioError(f"{path}:{line}: {exc}") from None
+    qw, qx, qy, qz (an orientation); header names may carry units (``x [m]``). Read by
+    :func:`tca_casadi.tables.read_table` (one-line errors for any bad file)."""
+    from ..tables import name_of, read_table
+    table = read_table(path, "inverse --path", "targets file", required=("x", "y", "z"))
+    columns = {name_of(name).lower(): k for k, name in enumerate(table.header)}
+    targets = []
+    for k in range(len(table.rows)):
+        try:
+            targets.append(Target.create(_take(table, k, columns, "xyz"), _take(table, k, columns, ("dx", "dy", "dz")),
+                                         _take(table, k, columns, ("qw", "qx", "qy", "qz")), point))
+        except ScenarioError as exc:
+            message = str(exc)
+            raise ScenarioError(message if message.startswith("inverse --path") else f"{table.where(k)}: {message}") from None
     if not targets:
-        raise ScenarioError(f"{path}: no targets")
+        raise ScenarioError(f"inverse --path: {path}: no targets (a header x, y, z, then one row per target)")
     return targets
 
 
-def _take(row, columns, keys):
-    """The numbers of ``keys`` in a CSV row, or None when any is absent or empty."""
-    if not all(k in columns and row[columns[k]].strip() for k in keys):
+def _take(table, k, columns, keys):
+    """The numbers of ``keys`` in row ``k`` of ``table``, or None when any is absent or empty."""
+    if not all(key in columns and table.rows[k][columns[key]].strip() for key in keys):
         return None
-    try:
-        return [float(row[columns[k]]) for k in keys]
-    except ValueError:
-        raise ScenarioError(f"not a number in {[row[columns[k]] for k in keys]}") from None
+    return [table.number(k, columns[key]) for key in keys]

@@ -12,7 +12,6 @@ by central differences of relative step :data:`STEP` (the thermal ODE is not par
 collocation NLP, so there is no implicit-function derivative to take; the integrator's
 tolerance keeps the differences to about 1e-6).
 """
-import csv
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,7 +19,7 @@ import numpy as np
 
 from ..errors import ScenarioError
 from ..units import ureg
-from .fit import _cell, _split_unit as _split
+from .fit import _split_unit as _split
 
 #: relative step of the central differences
 STEP = 1e-5
@@ -31,19 +30,9 @@ UNITS = {"heat_capacity": "J/K", "conductance": "W/K"}
 
 
 def is_time_series(path):
-    """True if a measurement CSV has a time column ``t`` (ScenarioError if it is not a file)."""
-    path = Path(path)
-    if not path.is_file():
-        raise ScenarioError(f"fit --data: {path} is not a file")
-    header = _header(path)
-    return any(_split(text)[0] == "t" for text in header)
-
-
-def _header(path):
-    with open(path, newline="") as stream:
-        for row in csv.reader(line for line in stream if line.strip() and not line.lstrip().startswith("#")):
-            return row
-    return []
+    """True if a measurement CSV has a time column ``t`` (ScenarioError if it cannot be read)."""
+    from ..tables import name_of, read_table
+    return any(name_of(text) == "t" for text in read_table(path, "fit --data", "measurements file").header)
 
 
 @dataclass
@@ -63,53 +52,52 @@ class HeatingCurve:
 
 
 def read_heating_curve(path, robot, sigma=None):
-    """A :class:`HeatingCurve` from a CSV; one-line ScenarioErrors naming the column or row."""
-    path = Path(path)
-    with open(path, newline="") as stream:
-        rows = list(csv.reader(line for line in stream if line.strip() and not line.lstrip().startswith("#")))
-    header, records = rows[0], rows[1:]
-    if not records:
+    """A :class:`HeatingCurve` from a CSV (read by :func:`tca_casadi.tables.read_table`);
+    one-line ScenarioErrors naming the column or line."""
+    from ..tables import read_table
+    table = read_table(path, "fit --data", "heating curve")
+    header, n = table.header, len(table.rows)
+    if not n:
         raise ScenarioError(f"fit --data: {path} has a header but no rows")
     keys = [a.key for a in robot.thermal_actuators]
     time_column, measured, sigmas = None, [], {}
     for column, text in enumerate(header):
         name, unit = _split(text)
         if name == "t":
-            time_column = (column, unit or "s", text)
+            time_column = (column, unit or "s")
         elif name.startswith("sigma_"):
-            sigmas[name[len("sigma_"):]] = (column, unit, text)
+            sigmas[name[len("sigma_"):]] = (column, unit)
         elif name.endswith(".temperature") and name.rsplit(".", 1)[0] in keys:
-            measured.append((name, column, unit, text))
+            measured.append((name, column, unit))
         else:
             raise ScenarioError(f"fit --data: column {text!r} of a time series (it has a t column) must be a TCA's "
                                 f"temperature ({', '.join(k + '.temperature' for k in keys)}) or its sigma_")
     if not measured:
         raise ScenarioError(f"fit --data: {path} has a t column but no measured temperature column")
-    times = np.array([_value(r[time_column[0]], time_column[1], "s", time_column[2], k)
-                      for k, r in enumerate(records, start=2)])
+    times = np.array([_value(table, k, time_column[0], time_column[1], "s") for k in range(n)])
     if np.any(np.diff(times) <= 0) or times[0] < 0:
         raise ScenarioError(f"fit --data: the t column of {path} must start at 0 or later and increase")
-    values = np.column_stack([[_value(r[column], unit or "degC", "degC", text, k) for k, r in enumerate(records, start=2)]
-                              for _, column, unit, text in measured])
+    values = np.column_stack([[_value(table, k, column, unit or "degC", "degC") for k in range(n)]
+                              for _, column, unit in measured])
     spread = np.full(values.shape, float(sigma or TEMPERATURE_SIGMA))
     for j, (name, *_) in enumerate(measured):
         if name in sigmas:
-            column, unit, text = sigmas[name]
-            spread[:, j] = [_value(r[column], unit or "K", "K", text, k, difference=True)
-                            for k, r in enumerate(records, start=2)]
+            column, unit = sigmas[name]
+            spread[:, j] = [_value(table, k, column, unit or "K", "K", difference=True) for k in range(n)]
     if not np.all(spread > 0):
         raise ScenarioError("fit --data: every sigma must be positive")
     return HeatingCurve(times, [m[0] for m in measured], values, spread, str(path))
 
 
-def _value(cell, unit, target, column, row, difference=False):
-    value = _cell(cell, column, row)
+def _value(table, k, column, unit, target, difference=False):
+    """Row ``k``, ``column`` of ``table`` in the unit ``target``."""
+    value = table.number(k, column)
     try:
         if difference:                  # a temperature difference: K and degC steps alike
             unit = {"degC": "K", "°C": "K"}.get(unit, unit)
         return float(ureg.Quantity(value, unit).to(target).magnitude)
     except Exception:
-        raise ScenarioError(f"fit --data: column {column!r}: [{unit}] is not a unit of {target}") from None
+        raise ScenarioError(f"fit --data: column {table.header[column]!r}: [{unit}] is not a unit of {target}") from None
 
 
 @dataclass

@@ -256,3 +256,101 @@ def test_every_bad_step_is_listed(capsys, bending):
     lines = err.strip().splitlines()
     assert code == 2 and len(lines) == 2, err
     assert "sequence[a]" in lines[0] and "sequence[c]" in lines[1] and "(did you mean 'bending'?)" in lines[1]
+
+
+# ----------------------------------------------------------------------------- data files
+MEASUREMENTS = "bending.tca2.temperature [degC],tip_x [mm]\n40,-1.5\n90,-8.0\n"
+HEATING = "t [s],bending.tca2.temperature [degC]\n0,25\n1,30\n2,34\n"
+TARGETS = "x [m],y [m],z [m]\n-0.01,0,-0.04\n"
+ROWS = "bending.tca2.temperature [degC]\n40\n90\n"
+GOOD = {"fit": MEASUREMENTS, "heating": HEATING, "inverse": TARGETS, "rows": ROWS}
+BROKEN = {   # what each kind of damage does to a good file, and a word of the answer
+    "not utf-8": (lambda text: text.encode()[:-4] + b"\xff\xfe9\n", "not UTF-8 text (byte 0xff"),
+    "nul byte": (lambda text: text.replace("\n", "\n\x00", 1).encode(), "a NUL byte"),
+    "empty": (lambda text: b"# nothing but a comment\n\n", "is empty"),
+    "nan": (lambda text: text.replace("\n40", "\nnan", 1).replace("\n0,", "\nnan,", 1).replace(
+        "\n-0.01", "\nnan", 1).encode(), "is not a finite number"),
+    "short row": (lambda text: (text + "7\n").encode() if "," in text.splitlines()[0] else (text + "7,8\n").encode(),
+                  "values for"),
+    "text cell": (lambda text: text.replace("\n40", "\nhot", 1).replace("\n0,", "\nnow,", 1).replace(
+        "\n-0.01", "\nleft", 1).encode(), "is not a number"),
+}
+
+
+def _command(kind, path, bending, tmp_path):
+    out = ["-o", str(tmp_path / "out"), "--quiet"]
+    if kind in ("fit", "heating"):
+        drive = ["--set", "bending.tca2.drive={kind: power, value: 0.1}"] if kind == "heating" else []
+        param = "tca_types.nylon.thermal.conductance" if kind == "heating" else "materials.ecoflex30.youngs_modulus"
+        return ["fit", bending, *drive, "--data", path, "--param", param, *out]
+    if kind == "inverse":
+        return ["inverse", bending, "--path", path, *out]
+    return ["study", bending, "--rows", path, *out]
+
+
+@pytest.mark.parametrize("kind", sorted(GOOD))
+@pytest.mark.parametrize("damage", sorted(BROKEN))
+def test_every_data_file_the_cli_reads_answers_damage_in_one_line(capsys, bending, tmp_path, kind, damage, no_solving):
+    """``fit --data`` (measurements and heating curves), ``inverse --path``, ``study --rows``:
+    bad bytes, NUL, empty, NaN, rows of the wrong length, text: one line naming the file (and
+    its line where there is one), exit 2, nothing solved."""
+    make, words = BROKEN[damage]
+    path = tmp_path / "data.csv"
+    path.write_bytes(make(GOOD[kind]))
+    code, _, err = run(capsys, *_command(kind, path, bending, tmp_path))
+    line = one_error_line(err)
+    assert code == 2 and words in line and str(path) in line, line
+    if damage not in ("empty",):
+        assert " line " in line, line
+
+
+@pytest.mark.parametrize("kind", sorted(GOOD))
+def test_a_huge_data_file_is_refused_unread(capsys, bending, tmp_path, kind, no_solving):
+    path = tmp_path / "huge.csv"
+    with open(path, "wb") as handle:             # sparse: 101 MiB on paper, nothing on disk
+        handle.write(GOOD[kind].encode())
+        handle.truncate(101 * 2**20)
+    code, _, err = run(capsys, *_command(kind, path, bending, tmp_path))
+    line = one_error_line(err)
+    assert code == 2 and "is 101 MiB" in line and "at most 100 MiB" in line, line
+
+
+@pytest.mark.parametrize("kind", sorted(GOOD))
+def test_a_data_file_without_its_columns_says_which(capsys, bending, tmp_path, kind, no_solving):
+    path = tmp_path / "data.csv"
+    path.write_text("a,b\n1,2\n")
+    code, _, err = run(capsys, *_command(kind, path, bending, tmp_path))
+    line = one_error_line(err)
+    assert code == 2 and ("'a'" in line or "column" in line), line
+
+
+@pytest.mark.parametrize("damage, words", [
+    (b'{"sample": 3, "tip_x [m]": 0.1}\n\xff\xfe\n{"sample": 4}\n', "line 3: not UTF-8 text"),
+    (b'{"sample": 3}\n{"sample": 4, "tip\n{"sample": 5}\n', "line 3: not a JSON row; the file is damaged"),
+    (b'{"sample": 3}\n["no", "sample"]\n', "a row without its sample number"),
+])
+def test_a_damaged_resume_file_is_one_line(capsys, bending, tmp_path, damage, words):
+    """``study --resume`` over a rows file damaged in the middle (a write cut short at its end is
+    fine: that sample is solved again)."""
+    from tca_casadi.studies.study import PARTIAL
+    args = ["study", bending, "--vary", "bending.tca2.temperature=25:125:3", "-o", str(tmp_path), "--quiet", "--no-plot"]
+    plan = b'{"plan": "%s", "samples": 3}\n' % _plan_of(capsys, args, tmp_path, PARTIAL)
+    first = (tmp_path / "study.csv").read_text()
+    (tmp_path / PARTIAL).write_bytes(plan + damage)
+    code, _, err = run(capsys, *args, "--resume")
+    line = one_error_line(err)
+    assert code == 2 and words in line and PARTIAL in line, line
+    assert (tmp_path / "study.csv").read_text() == first          # the results of the run before stay
+
+
+def _plan_of(capsys, args, directory, partial):
+    """The plan digest a study writes as its rows file's first line (from an interrupted run)."""
+    import json
+    from tca_casadi.studies import study as module
+    original = module._Stream.close
+    module._Stream.close = lambda self: None                      # keep the rows file
+    try:
+        run(capsys, *args)
+    finally:
+        module._Stream.close = original
+    return json.loads((directory / partial).read_text().splitlines()[0])["plan"].encode()

@@ -103,7 +103,7 @@ def test_rows_from_a_csv(bending, tmp_path):
             f"materials.ecoflex30.youngs_modulus={float(row['materials.ecoflex30.youngs_modulus [Pa]'])!r}"])
         assert_allclose(row[TIP].to_numpy(float), independent.solve(warn=False).tip_position, rtol=0, atol=1e-9)
     (tmp_path / "bad.csv").write_text("bending.tca2.temperature\n40\nhot\n")
-    with pytest.raises(ScenarioError, match="line 3, column bending.tca2.temperature: 'hot' is not a number"):
+    with pytest.raises(ScenarioError, match="bad.csv line 3, column 'bending.tca2.temperature': 'hot' is not a number"):
         Study(tc.Simulation.from_file(bending), rows=tmp_path / "bad.csv")
 
 
@@ -171,7 +171,7 @@ def test_cli_writes_every_file(bending, tmp_path, capsys):
 @pytest.mark.parametrize("args, message", [
     (["--vary", "bending.tca9.temperature=25:125"], "neither a parameter nor a scenario value"),
     (["--vary", "bending.lenght=40mm:50mm:2"], "did you mean 'length'"),
-    (["--rows", "missing.csv"], "is not a file"),
+    (["--rows", "missing.csv"], "missing.csv: no such file"),
     (["--vary", "bending.tca2.temperature=100:100"], "empty"),
     (["--vary", "bending.tca2.temperature=125:25"], "empty"),
     (["--vary", "bending.tca2.temperature=25:125:-2"], "points"),
