@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 from .errors import ScenarioError, TcaError
-from .output import default_directory, prepare_directory, write_json
+from .output import ResultSet, default_directory, write_json
 
 
 def _scenario_arguments(parser):
@@ -199,6 +199,14 @@ def main(argv=None):
     except TcaError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
+    except (MemoryError, RuntimeError) as exc:
+        from .resources import available_memory, is_out_of_memory, readable_bytes
+        if not is_out_of_memory(exc):
+            raise
+        print(f"error: out of memory ({readable_bytes(available_memory() or 0)} available): the problem is too large for "
+              "this machine; lower solver.max_intervals or solver.intervals, the number of samples, steps or output "
+              "times; no result was written", file=sys.stderr)
+        return 1
     except BrokenPipeError:            # the reader left (``| head``): not an error of ours
         import os
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
@@ -206,7 +214,8 @@ def main(argv=None):
     except KeyboardInterrupt:
         if argv is None:                 # a second Ctrl-C must not break the one-line report
             signal.signal(signal.SIGINT, signal.SIG_IGN)
-        print("interrupted (files already written are complete)", file=sys.stderr)
+        print("interrupted: no result of this run was written (the output directory keeps what it held; "
+              "a study goes on from its solved rows with --resume)", file=sys.stderr)
         if argv is None:
             _exit_interrupted()
         return 130
@@ -293,22 +302,20 @@ def _print_thermal(scenario, robot):
 def _solve(args):
     from .simulation import Simulation
     sim = Simulation.from_file(Path(args.scenario), args.overrides, method=args.method, allow_code=args.allow_code)
-    output = prepare_directory(args.output or default_directory(sim.scenario.name),
-                               ["solution.json", "arrays.npz", "robot.png"],
-                               stale=["robot.png"] if args.no_plot else [])
-    solution = sim.solve(warn=False)          # its warnings are in the summary and solution.json
-    json_path, npz_path = solution.save(output)
-    written = [json_path, npz_path]
-    if not args.no_plot:
-        from .plotting import save_robot_png
-        from .studies.objects import object_poses
-        objects = object_poses(sim.scenario, sim.robot, solution)
-        written.append(save_robot_png(solution, output / "robot.png", objects=objects))
+    with _results(args, sim, "solve", ["solution.json", "arrays.npz", "robot.png"],
+                  stale=["robot.png"] if args.no_plot else []) as run:
+        solution = sim.solve(warn=False)          # its warnings are in the summary and solution.json
+        written = list(solution.save(run.staging))
+        if not args.no_plot:
+            from .plotting import save_robot_png
+            from .studies.objects import object_poses
+            objects = object_poses(sim.scenario, sim.robot, solution)
+            written.append(save_robot_png(solution, run.staging / "robot.png", objects=objects))
     if args.json:
         print(json.dumps(solution.to_dict(), indent=2))
     else:
         print(solution.summary())
-        print("wrote " + ", ".join(str(p) for p in written))
+        print("wrote " + ", ".join(str(p) for p in run.final(written)))
     return 0 if solution.converged else 1
 
 
@@ -316,14 +323,14 @@ def _check(args):
     from .simulation import Simulation
     from .studies import check
     sim = Simulation.from_file(Path(args.scenario), args.overrides, allow_code=args.allow_code)
-    output = prepare_directory(args.output or default_directory(sim.scenario.name), ["check.json"])
-    report, _, _ = check(sim, args.position_tolerance, args.tension_tolerance)
-    path = report.save(output / "check.json")
+    with _results(args, sim, "check", ["check.json"]) as run:
+        report, _, _ = check(sim, args.position_tolerance, args.tension_tolerance)
+        path = report.save(run.staging / "check.json")
     if args.json:
         print(json.dumps(report.to_dict(), indent=2))
     else:
         print(report.summary())
-        print(f"wrote {path}")
+        print(f"wrote {run.final([path])[0]}")
     return 0 if report.agree else 1
 
 
@@ -334,12 +341,12 @@ def _sweep(args):
     sweep = Sweep(sim, args.params, _number(args.start), _number(args.stop), args.steps,
                   arclength=args.arclength, min_step=args.min_step)
     plots = ["sweep.png", "sweep_robots.png"]
-    output = prepare_directory(args.output or default_directory(sim.scenario.name, "sweep"),
-                               ["sweep.csv", "sweep.json"] + plots, stale=plots if args.no_plot else [])
-    result = _with_progress(sweep.run, "sweep", quiet=args.quiet)
-    written = result.save(output, plots=not args.no_plot)
+    with _results(args, sim, "sweep", ["sweep.csv", "sweep.json"] + plots, stale=plots if args.no_plot else [],
+                  default="sweep") as run:
+        result = _with_progress(sweep.run, "sweep", quiet=args.quiet)
+        written = result.save(run.staging, plots=not args.no_plot)
     print(result.summary())
-    print("wrote " + ", ".join(str(p) for p in written))
+    print("wrote " + ", ".join(str(p) for p in run.final(written)))
     return 0 if result.completed else 1
 
 
@@ -358,16 +365,17 @@ def _inverse(args):
                                           starts=args.starts, method=args.method)
     files = ["inverse_path.csv"] if args.path is not None else ["inverse.json", "solution.json",
                                                                  "arrays.npz", "inverse.png"]
-    output = prepare_directory(args.output or default_directory(sim.scenario.name, "inverse"), files,
-                               stale=["inverse.png"] if args.no_plot and args.path is None else [])
+    run = _results(args, sim, "inverse_path" if args.path is not None else "inverse", files,
+                   stale=["inverse.png"] if args.no_plot and args.path is None else [], default="inverse")
     if args.path is not None:
         targets = read_targets(args.path, args.point or "tip")
-        results = _with_progress(lambda progress: solver.track(targets, progress), "inverse", args.quiet)
-        written = write_path_results(output / "inverse_path.csv", results)
+        with run:
+            results = _with_progress(lambda progress: solver.track(targets, progress), "inverse", args.quiet)
+            written = write_path_results(run.staging / "inverse_path.csv", results)
         reached = sum(r.reachable for r in results)
         print(f"inverse path: {reached}/{len(results)} targets reached; "
               f"median {_median([r.solve_time_s for r in results]) * 1e3:.0f} ms per target")
-        print(f"wrote {written}")
+        print(f"wrote {run.final([written])[0]}")
         return 0 if reached == len(results) else 1
     if args.target_position is None:
         target = solver.scenario_target(args.point)
@@ -377,10 +385,11 @@ def _inverse(args):
         except ValueError as exc:
             raise ScenarioError(f"--target-position: {exc}") from None
         target = Target.create(position, args.target_direction, args.target_orientation, args.point or "tip")
-    result = solver.solve(target)
-    written = result.save(output, plot=not args.no_plot)
+    with run:
+        result = solver.solve(target)
+        written = result.save(run.staging, plot=not args.no_plot)
     print(result.summary())
-    print("wrote " + ", ".join(str(p) for p in written))
+    print("wrote " + ", ".join(str(p) for p in run.final(written)))
     return 0 if result.reachable and result.verified else 1
 
 
@@ -392,22 +401,29 @@ def _sequence(args):
     frames = 0 if args.no_animation else max(args.frames, 0)
     stale = ["step_*.png"] + (["sequence.gif", "sequence.mp4"] if args.no_animation else []) + \
         ([] if args.check else ["sequence_check.json"])
-    output = prepare_directory(args.output or default_directory(sim.scenario.name, "sequence"),
-                               ["sequence.csv", "sequence_check.json", "sequence.gif", "sequence.mp4"],
-                               stale=stale)
-    result = _with_progress(lambda progress: run_sequence(sim, frames_per_step=frames, progress=progress,
-                                                          check=args.check), "steps", args.quiet)
-    written = [result.to_csv(output / "sequence.csv"), *save_step_pngs(result, output)]
-    if args.check:
-        reports = {name: report.to_dict() for name, report in zip(result.names, result.checks)}
-        written.append(write_json(output / "sequence_check.json", reports))
-    if not args.no_animation:
-        written += _with_progress(lambda progress: save_animation(result, output, progress=progress),
-                                  "animation", args.quiet)
+    with _results(args, sim, "sequence", ["sequence.csv", "sequence_check.json", "sequence.gif", "sequence.mp4"],
+                  stale=stale, default="sequence") as run:
+        result = _with_progress(lambda progress: run_sequence(sim, frames_per_step=frames, progress=progress,
+                                                              check=args.check), "steps", args.quiet)
+        output = run.staging
+        written = [result.to_csv(output / "sequence.csv"), *save_step_pngs(result, output)]
+        if args.check:
+            reports = {name: report.to_dict() for name, report in zip(result.names, result.checks)}
+            written.append(write_json(output / "sequence_check.json", reports))
+        if not args.no_animation:
+            written += _with_progress(lambda progress: save_animation(result, output, progress=progress),
+                                      "animation", args.quiet)
     print(result.summary())
-    print(f"wrote {len(written)} files to {output}: sequence.csv, step PNGs"
+    print(f"wrote {len(written)} files to {run.directory}: sequence.csv, step PNGs"
           + ("" if args.no_animation else ", " + ", ".join(p.name for p in written if p.suffix in (".gif", ".mp4"))))
     return 0 if result.converged and result.agree is not False else 1
+
+
+def _results(args, sim, command, files, stale=(), default=None):
+    """The :class:`~tca_casadi.output.ResultSet` of a command's output directory (``-o``, else
+    ``results/<scenario name>[/default]``): prepared on entering, made visible on leaving."""
+    directory = args.output or default_directory(sim.scenario.name, *([default] if default else []))
+    return ResultSet(directory, command, files, stale, argv=sys.argv[1:], scenario=str(args.scenario))
 
 
 def _median(values):
@@ -493,23 +509,24 @@ def _simulate(args):
     timed = TimeSimulation(sim, duration=duration, dt=dt)
     plots = ["timeseries.png"]
     movies = ["simulate.gif", "simulate.mp4"]
-    output = prepare_directory(args.output or default_directory(sim.scenario.name, "simulate"),
-                               ["timeseries.csv", "simulation.json"] + plots + movies,
-                               stale=(plots if args.no_plot else []) + (movies if args.no_animation else []))
-    series = _with_progress(timed.run, "simulate", quiet=args.quiet)
-    written = [series.to_csv(output / "timeseries.csv"), write_json(output / "simulation.json", timed.report(series))]
-    if not args.no_plot and series.solutions:
-        from .plotting.timeseries import save_timeseries_png
-        written.append(save_timeseries_png(series, output / "timeseries.png", [e.at for e in sim.scenario.timeline]))
-    print(timed.summary(series))
-    if not args.no_animation and series.solutions:
-        from .plotting.animation import save_time_animation
-        moving = {"fps": 20, "max_frames": 200} if sim.scenario.dynamics.enabled else {}   # motion: finer in time
-        paths, speed_up = _with_progress(lambda progress: save_time_animation(series, output, progress=progress,
-                                                                              **moving), "animation", quiet=args.quiet)
-        written += paths
-        print(f"animation at {'real time' if speed_up == 1 else f'{speed_up}x real time'}")
-    print("wrote " + ", ".join(str(p) for p in written))
+    with _results(args, sim, "simulate", ["timeseries.csv", "simulation.json"] + plots + movies,
+                  stale=(plots if args.no_plot else []) + (movies if args.no_animation else []), default="simulate") as run:
+        output = run.staging
+        series = _with_progress(timed.run, "simulate", quiet=args.quiet)
+        written = [series.to_csv(output / "timeseries.csv"),
+                   write_json(output / "simulation.json", timed.report(series))]
+        if not args.no_plot and series.solutions:
+            from .plotting.timeseries import save_timeseries_png
+            written.append(save_timeseries_png(series, output / "timeseries.png", [e.at for e in sim.scenario.timeline]))
+        print(timed.summary(series))
+        if not args.no_animation and series.solutions:
+            from .plotting.animation import save_time_animation
+            moving = {"fps": 20, "max_frames": 200} if sim.scenario.dynamics.enabled else {}   # motion: finer in time
+            paths, speed_up = _with_progress(lambda progress: save_time_animation(series, output, progress=progress,
+                                                                                  **moving), "animation", quiet=args.quiet)
+            written += paths
+            print(f"animation at {'real time' if speed_up == 1 else f'{speed_up}x real time'}")
+    print("wrote " + ", ".join(str(p) for p in run.final(written)))
     return 0 if series.completed else 1
 
 
@@ -526,14 +543,17 @@ def _study(args):
     study = Study(sim, vary=vary, outputs=args.outputs, design=args.design, samples=args.samples,
                   seed=args.seed, rows=args.rows)
     plots = ["study_workspace.png", "study_monte_carlo.png", "study_response.png"]
-    output = prepare_directory(args.output or default_directory(sim.scenario.name, "study"),
-                               ["study.parquet", "study.csv", "study.json"] + plots, stale=plots)
-    result = _with_progress(lambda progress: study.run(workers=args.workers, scheduler=args.scheduler,
-                                                       progress=progress, directory=output, resume=args.resume),
-                            "study", quiet=args.quiet)
-    written = result.save(output, plots=not args.no_plot, color=args.color)
+    with _results(args, sim, "study", ["study.parquet", "study.csv", "study.json"] + plots, stale=plots,
+                  default="study") as run:
+        # the rows journal (study_rows.jsonl) lives in the output directory itself, so that
+        # --resume finds the rows of a run that was killed; it goes once the results are in place
+        result = _with_progress(lambda progress: study.run(workers=args.workers, scheduler=args.scheduler,
+                                                           progress=progress, directory=run.directory,
+                                                           resume=args.resume), "study", quiet=args.quiet)
+        written = result.save(run.staging, plots=not args.no_plot, color=args.color, finish=False)
+    result.finish()
     print(result.summary())
-    print("wrote " + ", ".join(str(p) for p in written))
+    print("wrote " + ", ".join(str(p) for p in run.final(written)))
     return 0 if result.info["failed"] == 0 else 1
 
 
@@ -564,16 +584,16 @@ def _fit(args):
     fit = Fit(sim, args.data, args.params, bounds=bounds, sigmas=sigmas, absolute_sigma=args.absolute_sigma,
               starts=args.starts, holdout=args.holdout, seed=args.seed)
     plots = ["fit.png", "fit_parameters.png"]
-    output = prepare_directory(args.output or default_directory(sim.scenario.name, "fit"),
-                               ["fit.json", "fitted.yaml"] + plots, stale=plots if args.no_plot else [])
     if args.profile is not None and args.profile not in args.params:
         raise ScenarioError(f"--profile {args.profile}: not one of the fitted parameters (--param)")
-    result = _with_progress(fit.run, "fit", quiet=args.quiet)
-    if args.profile is not None:
-        result.profile = fit.profile(result, args.profile)
-    written = result.save(output, plots=not args.no_plot)
+    with _results(args, sim, "fit", ["fit.json", "fitted.yaml"] + plots, stale=plots if args.no_plot else [],
+                  default="fit") as run:
+        result = _with_progress(fit.run, "fit", quiet=args.quiet)
+        if args.profile is not None:
+            result.profile = fit.profile(result, args.profile)
+        written = result.save(run.staging, plots=not args.no_plot)
     print(result.summary())
-    print("wrote " + ", ".join(str(p) for p in written))
+    print("wrote " + ", ".join(str(p) for p in run.final(written)))
     return 0 if result.converged else 1
 
 

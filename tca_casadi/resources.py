@@ -7,18 +7,38 @@ from .errors import ResourceError
 
 
 def available_memory():
-    """Bytes of memory available to a new allocation (Linux ``MemAvailable``; else the physical
-    memory), or None when unknown."""
+    """Bytes of memory available to this process (Linux ``MemAvailable``, else the physical
+    memory; at most what an address-space limit, ``ulimit -v``, leaves), or None when unknown."""
+    found = None
     try:
         with open("/proc/meminfo") as handle:
             for line in handle:
                 if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
+                    found = int(line.split()[1]) * 1024
     except (OSError, ValueError, IndexError):
         pass
+    if found is None:
+        try:
+            found = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        except (ValueError, OSError, AttributeError):
+            pass
+    limit = _address_space_left()
+    if limit is not None:
+        found = limit if found is None else min(found, limit)
+    return found
+
+
+def _address_space_left():
+    """Bytes of address space this process may still map under ``RLIMIT_AS``, or None."""
     try:
-        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):
+        import resource
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+        if soft == resource.RLIM_INFINITY:
+            return None
+        with open("/proc/self/statm") as handle:
+            used = int(handle.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+        return max(soft - used, 0)
+    except (ImportError, OSError, ValueError, IndexError):
         return None
 
 

@@ -17,6 +17,9 @@ from .newton import BufferedFunction, SquareSystem
 
 log = logging.getLogger(__name__)
 
+#: what to change when a robot's NLP does not fit in memory
+MEMORY_ADVICE = ("lower solver.max_intervals or solver.intervals (or loosen solver.tip_tolerance and "
+                 "tension_tolerance, which drive the refinement), or use a machine with more memory")
 #: samples per interval where contact gaps are checked between the nodes
 FINE_SAMPLES = 16
 #: built solvers kept for reuse, by (scenario name, structure key, meshes, degree); the oldest go
@@ -41,14 +44,18 @@ class CollocationSolver:
     nlp_class = CollocationNLP
 
     def __init__(self, robot, options, meshes=None, degree=None, structure=None):
+        from ..resources import memory_guard
         start = time.perf_counter()
         self.robot, self.options, self.structure = robot, options, structure
         self.degree = degree or options.degree
-        self.nlp = self.nlp_class(robot, options.intervals, self.degree, options.scheme, meshes)
-        self._constraints = ca.Function("nlp_g", [self.nlp.w, self.nlp.P], [self.nlp.problem["g"]]).expand()
-        w, P = ca.SX.sym("w", self.nlp.w.numel()), ca.SX.sym("P", self.nlp.P.numel())
-        g = self._constraints(w, P)                   # the Jacobian of the expanded (SX) residual
-        self._jacobian = ca.Function("nlp_jac_g", [w, P], [g, ca.jacobian(g, w)])
+        what = f"building the collocation NLP of {robot.name!r}"
+        with memory_guard(what + (f" on {sum(len(m.intervals) for m in meshes)} intervals" if meshes else ""),
+                          MEMORY_ADVICE):
+            self.nlp = self.nlp_class(robot, options.intervals, self.degree, options.scheme, meshes)
+            self._constraints = ca.Function("nlp_g", [self.nlp.w, self.nlp.P], [self.nlp.problem["g"]]).expand()
+            w, P = ca.SX.sym("w", self.nlp.w.numel()), ca.SX.sym("P", self.nlp.P.numel())
+            g = self._constraints(w, P)                   # the Jacobian of the expanded (SX) residual
+            self._jacobian = ca.Function("nlp_jac_g", [w, P], [g, ca.jacobian(g, w)])
         self._ipopt_instance = None      # IPOPT is built on first use (Newton needs only g and J)
         self._square = None
         self._higher = None

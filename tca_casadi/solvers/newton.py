@@ -105,10 +105,13 @@ class SquareSystem:
     def factorise(self, J):
         """:class:`OrderedLU` of a Jacobian ``J`` (CSC) of this system, in the column order chosen
         (:func:`column_order`) at the first one."""
-        if self._order is None:
-            order = column_order(J)
-            self._order = (order,)
-        return OrderedLU(J, self._order[0])
+        from ..resources import memory_guard
+        from .collocation import MEMORY_ADVICE
+        with memory_guard(f"factorising the Jacobian of {J.shape[0]} unknowns ({J.nnz} nonzeros)", MEMORY_ADVICE):
+            if self._order is None:
+                order = column_order(J)
+                self._order = (order,)
+            return OrderedLU(J, self._order[0])
 
     def residual(self, w, P):
         """A copy of ``g(w, P)`` (n,)."""

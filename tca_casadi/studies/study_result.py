@@ -145,9 +145,11 @@ class StudyResult:
             out["workspace"] = {k: v for k, v in hull.items() if k != "vertices"}
         return out
 
-    def save(self, directory, plots=True, color=None):
+    def save(self, directory, plots=True, color=None, finish=True):
         """Write ``study.parquet``, ``study.csv``, ``study.json`` and, with ``plots``, the
-        figures (:mod:`tca_casadi.plotting.study_plots`); the paths written."""
+        figures (:mod:`tca_casadi.plotting.study_plots`); the paths written. ``finish``: then
+        delete the rows journal of the run (:meth:`finish`; the CLI does it once the files are
+        in place)."""
         directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
         written = []
@@ -161,9 +163,14 @@ class StudyResult:
         if plots:
             from ..plotting.study_plots import save_study_plots
             written += save_study_plots(self, directory, color)
+        if finish:
+            self.finish()
+        return written
+
+    def finish(self):
+        """Delete the run's rows journal (``study_rows.jsonl``): its rows are in the results."""
         if getattr(self, "_stream", None) is not None:
             self._stream.close()
-        return written
 
 
 def _pandas():
