@@ -7,7 +7,9 @@ Variables ``w`` (scaled: the physical value is ``scale * w``):
        start, then the collocation points): the deviation state
        ``[p (3), h (4), (u - u*) (3), (v - v*) (3)]``, scaled by ``[L, 1, F_s L / K_bt, F_s / K_se]``
        (``F_s = EI / L^2``: the strains become order-one internal moments and forces);
-    2. for each module, the partial length of each of its actuators over each interval [/L];
+    2. for each module, the length of each of its actuators from the module's base to the end of
+       each interval (cumulative, [/L]: the compatibility equations touch only the last one, so
+       every column of the Jacobian is local and it stays block-banded);
     3. the unknown tensions [/F_s] (TCAs and displacement-controlled tendons), in
        ``robot.unknowns`` order.
 Parameters ``P``: the robot's parameter vector (``robot.layout``, declared in
@@ -16,8 +18,8 @@ Parameters ``P``: the robot's parameter vector (``robot.layout``, declared in
     The variables' scales use the scenario's values; the equations use ``P``.
 Constraints ``g`` (equalities, each scaled to order one), per module in order:
     the base pose (first module only); the rod equations at every collocation point,
-    ``[p' - R v, h' - Omega h / 2, equilibrium (6)]``; the partial lengths (Gauss quadrature of
-    ``|a|`` over each interval); at the interior breakpoints, continuity of p and h and the wrench
+    ``[p' - R v, h' - Omega h / 2, equilibrium (6)]``; the cumulative lengths (each the one
+    before plus the Gauss quadrature of ``|a|`` over the interval); at the interior breakpoints, continuity of p and h and the wrench
     jump ``K (xi+ - xi-) + point wrenches = 0``; at the module's end, the pose link to each child
     module (through its connector) and the wrench balance (the tip wrench when it has none).
     Last, one compatibility equation per unknown tension (a TCA's law multiplied through by
@@ -69,7 +71,7 @@ class CollocationNLP:
             "outputs", [self.w, self.P],
             [ca.vertcat(*self._lengths), ca.horzcat(*self._ends), ca.horzcat(*self._base_wrenches)],
             ["w", "P"], ["lengths", "ends", "base_wrenches"])
-        #: scaled partial lengths implied by the states (to initialise those unknowns)
+        #: scaled cumulative lengths implied by the states (to initialise those unknowns)
         self.partials = ca.Function("partials", [self.w, self.P],
                                     [ca.vertcat(*self._partial_exprs) if self._partial_exprs else ca.MX(0, 1)])
 
@@ -90,8 +92,9 @@ class CollocationNLP:
             index = offset + np.arange(count).reshape(len(mesh.intervals), d + 1, STATE_SIZE)
             self.state_index.append(index.transpose(0, 2, 1))  # (n_int, 13, d+1)
             offset += count
-        # partial lengths: one per (actuator, interval) of each module, so that the compatibility
-        # equations touch n_int unknowns instead of every state (keeps the Jacobian sparse)
+        # cumulative lengths: one per (actuator, interval) of each module, so that the
+        # compatibility equations touch one unknown instead of every state (keeps the Jacobian
+        # sparse), and each length two intervals' equations (keeps it banded)
         self._partials, self.partial_index = [], []
         for m, mesh in enumerate(self.meshes):
             module = self.robot.modules[m]
@@ -249,11 +252,13 @@ class CollocationNLP:
         if module.actuators:
             per_interval = ca.DM(_quadrature_matrix(scheme, steps))         # (npts, n_int)
             partial = (speed * ca.DM(active)) @ per_interval                  # (nA, n_int)
-            self._partial_exprs.append(ca.vec(partial) / module.length)
-            self._g.append(ca.vec(self._partials[m] - partial) / module.length)
+            running = self._partials[m]                                       # (nA, n_int) cumulative
+            before = ca.horzcat(ca.MX.zeros(len(module.actuators), 1), running[:, :-1])
+            self._partial_exprs.append(ca.vec(ca.cumsum(partial, 1)) / module.length)
+            self._g.append(ca.vec(running - before - partial) / module.length)
         for k, actuator in enumerate(module.actuators):
             position = self.robot.actuators.index(actuator)
-            self._lengths[position] = ca.sum2(self._partials[m][k, :])
+            self._lengths[position] = self._partials[m][k, -1]
         ends = X @ ca.DM(_end_matrix(scheme, n_int))           # (13, n_int)
         self._motion_constraints(m, Xc, colloc, derivative)
         starts = ((np.arange(1, n_int)) * (d + 1)).tolist()
@@ -445,6 +450,27 @@ class CollocationNLP:
             self._g.append(ca.vertcat(force / fo, moment / (fo * lo)))
 
     # ------------------------------------------------------------------ helpers for solvers
+    def banded_columns(self):
+        """A column order of ``w`` in which the Jacobian is block-banded: module by module,
+        interval by interval, each interval's node states then its cumulative lengths (and any
+        per-interval unknowns a subclass adds, :meth:`_interval_columns`); the unknowns that
+        couple many intervals (tensions, contact forces, bodies) last. (n,) indices."""
+        order = []
+        for m, index in enumerate(self.state_index):
+            running = self.partial_index[m].reshape(index.shape[0], -1) if self.partial_index[m].size else None
+            for i in range(index.shape[0]):
+                order.append(index[i].T.ravel())
+                order.extend(self._interval_columns(m, i))
+                if running is not None:
+                    order.append(running[i])
+        first = np.concatenate(order) if order else np.zeros(0, int)
+        rest = np.setdiff1d(np.arange(self.scale.size), first, assume_unique=False)
+        return np.concatenate([first, rest]).astype(int)
+
+    def _interval_columns(self, m, i):
+        """Further unknowns of interval i of module m, in the banded order (none in statics)."""
+        return []
+
     def node_s(self, m):
         """Arc length of every node of module m, shape (n_intervals, d+1)."""
         return self.meshes[m].node_s(self.scheme)

@@ -48,6 +48,10 @@ class DynamicCollocationNLP(CollocationNLP):
     docstring). Extra attributes: ``velocity_index`` (per module (n_int, 6, d+1) indices into
     ``w``), ``history_index`` (per module (n_int (d+1), 12) indices into ``P``), ``c0_index``."""
 
+    def _interval_columns(self, m, i):
+        """The velocity states of interval i of module m, beside its node states (banded order)."""
+        return [self.velocity_index[m][i].T.ravel()]
+
     def _declare_variables(self):
         super()._declare_variables()
         d, offset = self.scheme.degree, self.w.numel()

@@ -177,8 +177,8 @@ def _partials(nlp, w, m):
     module = nlp.robot.modules[m]
     if not module.actuators:
         return np.zeros((0, len(nlp.meshes[m].intervals)))
-    values = np.asarray(w, float)[nlp.partial_index[m]] * module.length
-    return values.reshape(len(module.actuators), -1, order="F")
+    running = (np.asarray(w, float)[nlp.partial_index[m]] * module.length).reshape(len(module.actuators), -1, order="F")
+    return np.diff(running, axis=1, prepend=0.0)
 
 
 def _interval_ends(nlp, w, m):

@@ -4,9 +4,9 @@ The residual and its exact sparse Jacobian come from the Function IPOPT already 
 (``nlp_jac_g``), evaluated into preallocated numpy buffers (CasADi's buffer API), so nothing is
 rebuilt and no CasADi matrix is converted at solve time. The Jacobian is factorised by SuperLU
 (row pivoting keeps it stable) in one column order per structure (:class:`OrderedLU`): the
-natural one (one module's collocation Jacobian is block-banded, and COLAMD's ordering costs
-more than it saves there) unless COLAMD's fill is less than half of it (a tree of modules: the
-arm's factors are 7x smaller, its factorisation 12x and its triangular solves 4x faster).
+NLP's block-banded order (interval by interval, the unknowns that couple intervals last:
+fill and time linear in the mesh) unless COLAMD's fill is less than half of it (a tree of
+modules, whose branches the banded order puts one after the other).
 """
 import time
 
@@ -50,13 +50,15 @@ class OrderedLU:
         return self.factors.L.nnz + self.factors.U.nnz
 
 
-def column_order(J):
-    """The column order :class:`OrderedLU` uses for Jacobians with ``J``'s pattern: None (natural)
-    or COLAMD's permutation when that roughly halves the fill (:data:`COLAMD_FILL`)."""
-    natural = OrderedLU(J)
+def column_order(J, banded=None):
+    """The column order :class:`OrderedLU` uses for Jacobians with ``J``'s pattern: ``banded``
+    (the NLP's block-banded order, :meth:`CollocationNLP.banded_columns`; None: J's own) or
+    COLAMD's permutation when that roughly halves the fill (:data:`COLAMD_FILL`; a tree of
+    modules, whose branches the banded order puts one after the other)."""
+    first = OrderedLU(J, banded)
     colamd = spla.splu(J, permc_spec="COLAMD")
-    if colamd.L.nnz + colamd.U.nnz >= COLAMD_FILL * natural.fill:
-        return None
+    if colamd.L.nnz + colamd.U.nnz >= COLAMD_FILL * first.fill:
+        return banded
     order = np.empty_like(colamd.perm_c)
     order[colamd.perm_c] = np.arange(colamd.perm_c.size)
     return order
@@ -109,8 +111,8 @@ class SquareSystem:
         from .collocation import MEMORY_ADVICE
         with memory_guard(f"factorising the Jacobian of {J.shape[0]} unknowns ({J.nnz} nonzeros)", MEMORY_ADVICE):
             if self._order is None:
-                order = column_order(J)
-                self._order = (order,)
+                banded = self.nlp.banded_columns() if hasattr(self.nlp, "banded_columns") else None
+                self._order = (column_order(J, banded),)
             return OrderedLU(J, self._order[0])
 
     def residual(self, w, P):

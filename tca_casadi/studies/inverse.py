@@ -28,7 +28,6 @@ import time
 
 import casadi as ca
 import numpy as np
-from scipy.stats import qmc
 
 from ..errors import ScenarioError
 from ..model.rotations import ROTATION, rotation_angle, rotation_numpy
@@ -211,6 +210,7 @@ class InverseStatics:
         """Initial ``tau``: the middle of the box, then a scrambled Sobol' set (seed 0)."""
         points = [np.full(len(self.parameters), 0.5)]
         if self.starts > 1:
+            from scipy.stats import qmc                 # only for several starts (1 s to import)
             sobol = qmc.Sobol(len(self.parameters), scramble=True, seed=0)
             points += list(sobol.random(2 ** int(np.ceil(np.log2(self.starts - 1))))[: self.starts - 1])
         return points
