@@ -61,19 +61,25 @@ class CollocationNLP:
         self._partial_exprs = []
         self._ends, self._base_wrenches = [], []
         self._node_at = {}                     # module -> {breakpoint s: deviation state there}
+        #: the rod equations' calls, cut out of the constraints (:mod:`.structure`)
+        self.rod_calls = []
         for m in range(len(robot.modules)):
             self._module_constraints(m)
         self._compatibility()
         self._contact_conditions()
-        g = ca.vertcat(*self._g)
+        #: the constraints with the rod equations' outputs as inputs: ``(w, P, Y_1..Y_k) -> g``
+        self.split = ca.Function("nlp_g_split", [self.w, self.P] + [c.outputs for c in self.rod_calls],
+                                 [ca.vertcat(*self._g)])
+        g = self._joined(self.split)
         self.problem = {"x": self.w, "p": self.P, "f": ca.MX(0), "g": g}
         self.outputs = ca.Function(
             "outputs", [self.w, self.P],
             [ca.vertcat(*self._lengths), ca.horzcat(*self._ends), ca.horzcat(*self._base_wrenches)],
             ["w", "P"], ["lengths", "ends", "base_wrenches"])
         #: scaled cumulative lengths implied by the states (to initialise those unknowns)
-        self.partials = ca.Function("partials", [self.w, self.P],
-                                    [ca.vertcat(*self._partial_exprs) if self._partial_exprs else ca.MX(0, 1)])
+        partials = ca.vertcat(*self._partial_exprs) if self._partial_exprs else ca.MX(0, 1)
+        self.partials = ca.Function("partials", [self.w, self.P], [self._joined(ca.Function(
+            "partials_split", [self.w, self.P] + [c.outputs for c in self.rod_calls], [partials]))])
 
     # ------------------------------------------------------------------ variables
     def _declare_variables(self):
@@ -236,16 +242,15 @@ class CollocationNLP:
         Xc = X[:, colloc]
         active = self._active_mask(m, nodes[:, 0] + 0.5 * steps)[:, interval_of]   # (nA, npts)
         viscous = self._viscous_nodes(m, X)                   # (6, nodes) or None (statics)
-        rod = rod_equations(module.xi_star, len(module.actuators), viscous is not None).map(len(colloc))
+        rod = rod_equations(module.xi_star, len(module.actuators), viscous is not None)
         stiffness = boundary.stiffness(module, self.param) @ ca.DM.ones(1, len(colloc))
         loads = self._distributed(m, nodes[:, 0] + 0.5 * steps, interval_of)
         inertial = self._inertial_loads(m, Xc, colloc)
         if inertial is not None:                              # body-frame force and moment
             loads[2], loads[3] = loads[2] + inertial[0], loads[3] + inertial[1]
         extra = [] if viscous is None else [viscous[:, colloc], viscous @ derivative]
-        kin, eq, speed = rod(Xc, dX[7:13, :],
-                             self._route_data(m, s_colloc, active), self._tension_field(m, active), stiffness,
-                             *loads, *extra)
+        kin, eq, speed = self._rod(rod, len(colloc), [Xc, dX[7:13, :], self._route_data(m, s_colloc, active),
+                                                      self._tension_field(m, active), stiffness, *loads, *extra])
         fs, length = module.force_scale, module.length
         eq_scale = np.r_[np.ones(3), np.full(4, length), np.full(3, 1 / fs), np.full(3, length / fs)]
         self._g.append(ca.vec(ca.diag(ca.DM(eq_scale)) @ ca.vertcat(dX[0:7, :] - kin, eq)))
@@ -271,6 +276,23 @@ class CollocationNLP:
         self._node_at[m] = {s0: X[:, i * (d + 1)] for i, (s0, _) in enumerate(mesh.intervals)} | \
             {module.length: ends[:, -1]}
         self._module_end(m, ends[:, -1])
+
+    def _rod(self, rod, points, inputs):
+        """``(kin, eq, speed)`` of ``rod`` (the rod equations at one point) at ``points`` points
+        whose inputs are the columns of ``inputs`` (one matrix per input of ``rod``): symbols
+        standing for the outputs, the call recorded in :attr:`rod_calls`
+        (:class:`~tca_casadi.discretisation.structure.RodCall`), so that the Jacobian can go
+        through the rod equations at one point, mapped, rather than through their expansion at
+        every point."""
+        from .structure import RodCall
+        call = RodCall.create(rod, points, inputs, len(self.rod_calls))
+        self.rod_calls.append(call)
+        Y = call.outputs
+        return Y[0:7, :], Y[7:13, :], Y[13:, :]
+
+    def _joined(self, split):
+        """The MX expression of ``split(w, P, Y_1..Y_k)`` with each rod call's true outputs."""
+        return split(self.w, self.P, *[c.evaluated() for c in self.rod_calls])
 
     def _inertial_loads(self, m, Xc, colloc):
         """Body-frame inertial force and moment per unit length (3, npts) at the collocation

@@ -8,6 +8,8 @@ import casadi as ca
 import numpy as np
 
 from ..discretisation import CollocationNLP
+from ..discretisation.structure import StructuredJacobian
+from ..errors import PhysicsWarning
 from ..status import SolveStatus, Status
 from . import accuracy
 from ..model.contact import gaps, outline_of
@@ -53,9 +55,8 @@ class CollocationSolver:
                           MEMORY_ADVICE):
             self.nlp = self.nlp_class(robot, options.intervals, self.degree, options.scheme, meshes)
             self._constraints = ca.Function("nlp_g", [self.nlp.w, self.nlp.P], [self.nlp.problem["g"]]).expand()
-            w, P = ca.SX.sym("w", self.nlp.w.numel()), ca.SX.sym("P", self.nlp.P.numel())
-            g = self._constraints(w, P)                   # the Jacobian of the expanded (SX) residual
-            self._jacobian = ca.Function("nlp_jac_g", [w, P], [g, ca.jacobian(g, w)])
+            # the Jacobian through the rod equations at one point, mapped (linear in the mesh)
+            self._jacobian = StructuredJacobian(self.nlp)
         self._ipopt_instance = None      # IPOPT is built on first use (Newton needs only g and J)
         self._square = None
         self._higher = None
@@ -99,7 +100,10 @@ class CollocationSolver:
         warm start, or the reference shape) and falls back to IPOPT if it fails; ``ipopt`` (the
         default) goes to IPOPT directly."""
         if self.options.algorithm == "newton":
-            newton = self.solve_newton(params, self.initial_guess(params, initial))
+            # from a warm start, the first steps are chord steps on the Jacobian factorised last
+            # (kept only while they contract the residual tenfold)
+            lu = self.square.last_lu if initial is not None and self._square is not None else None
+            newton = self.solve_newton(params, self.initial_guess(params, initial), lu=lu)
             if newton.converged:
                 return newton
         return self.solve_ipopt(params, initial)
@@ -238,8 +242,15 @@ class CollocationSolver:
             contact["bodies"] = {"grips": [w_phys[i] for i in nlp.grip_index],
                                  "poses": [w_phys[i] for i in nlp.pose_index],
                                  "supports": {b: w_phys[i] for b, i in nlp.support_index.items()}}
+        notices = []
+        if status.tolerance > self.options.tolerance:
+            notices.append(PhysicsWarning("tolerance_floor", f"the max scaled residual {status.residual:.1e} met a "
+                                          f"tolerance of {status.tolerance:.1e}, above solver.tolerance "
+                                          f"{self.options.tolerance:.0e}: roundoff in the equations' terms on this "
+                                          "mesh allows no less"))
         return build_solution(self.robot, robot_params, module_data, tensions, lengths.ravel(), status,
-                              self.method, {"w": w}, extra_loads=self._extra_loads(w, params, module_data), **contact)
+                              self.method, {"w": w}, notices=notices, extra_loads=self._extra_loads(w, params, module_data),
+                              **contact)
 
     def clearance(self, w, params):
         """Per obstacle (placed at ``params``), the body's nearest approach ``{name: {gap [m],

@@ -21,6 +21,19 @@ from .linearisation import Linearisation
 
 #: a chord step (the factorised Jacobian of an earlier point) is kept if it cuts |g|_2 this much
 CHORD_CONTRACTION = 0.1
+#: a residual entry can be computed no smaller than about a roundoff of the size of its terms
+#: (``eps (|J| |w|)_i``); on fine meshes the collocation's derivative terms (~d^2/h) make that
+#: floor pass 1e-10 (384 intervals: 1.5e-10), where Newton then stagnates
+ROUNDOFF_FACTOR = 2
+
+
+def roundoff_floor(J, w):
+    """The smallest max |g| computable at ``w`` for a system with Jacobian ``J`` (CSC):
+    :data:`ROUNDOFF_FACTOR` roundoffs of the largest row's terms, ``eps max_i (|J| |w|)_i``."""
+    if J.shape[0] == 0:
+        return 0.0
+    terms = abs(J) @ np.abs(w)
+    return float(ROUNDOFF_FACTOR * np.finfo(float).eps * np.max(terms))
 #: COLAMD's column order is used when its LU fill is below this fraction of the natural order's
 COLAMD_FILL = 0.5
 
@@ -91,13 +104,19 @@ class SquareSystem:
     def __init__(self, nlp, residual, jacobian, compiled_residual=None):
         self.nlp = nlp
         self._residual_function = residual
-        self._with_jacobian = BufferedFunction(jacobian)
         self._residual = BufferedFunction(compiled_residual or residual)
-        self._jacobian_pattern = CscPattern(jacobian.sparsity_out(1))
+        if isinstance(jacobian, ca.Function):
+            self._with_jacobian = BufferedFunction(jacobian)
+            self._jacobian_pattern = CscPattern(jacobian.sparsity_out(1))
+        else:                                    # a StructuredJacobian: (w, P) -> (g, nonzeros)
+            self._with_jacobian = jacobian
+            self._jacobian_pattern = CscPattern.of(jacobian.indptr, jacobian.indices, jacobian.shape)
         self.shape = self._jacobian_pattern.shape
         self._sensitivity = None
         self._order = None
         self.last_lu = None
+        #: the roundoff floor of the residual at the last Jacobian (:func:`roundoff_floor`)
+        self.floor = 0.0
 
     def evaluate(self, w, P):
         """``(g, J_w)``: copies of the residual (n,) and the Jacobian (CSC)."""
@@ -129,19 +148,27 @@ class SquareSystem:
         started = time.perf_counter()
         w, fresh = np.array(w0, float), False
         g = self.residual(w, P)
+        floor = max(tolerance, self.floor)      # what roundoff allows (:func:`roundoff_floor`)
 
-        def ended(iteration, failure=None):
+        def ended(iteration, failure=None, floored=False):
             self.last_lu = lu                      # the factors last used (a time stepper's next chord start)
             residual = float(np.max(np.abs(g))) if g.size else 0.0
-            return w, SolveStatus.judged("Newton", residual, tolerance, failure, nit=iteration,
-                                         solve_time_s=time.perf_counter() - started)
+            status = SolveStatus.judged("Newton", residual, floor if floored else tolerance, failure, nit=iteration,
+                                        solve_time_s=time.perf_counter() - started)
+            if floored:
+                status = status.noted(f"tolerance floored at {floor:.1e} by roundoff (Newton stagnated there; the "
+                                      f"residual's terms are {floor / (ROUNDOFF_FACTOR * np.finfo(float).eps):.1e})")
+            return w, status
 
+        before = np.inf                          # the residual before the last fresh Newton step
         for iteration in range(max_iterations + 1):
             residual = float(np.max(np.abs(g))) if g.size else 0.0
             if not np.isfinite(residual):
                 return ended(iteration, Status.NOT_FINITE)
             if residual <= tolerance:
                 return ended(iteration)
+            if residual <= floor and residual > 0.5 * before:       # stagnated at the roundoff floor
+                return ended(iteration, floored=True)
             if iteration == max_iterations:
                 break
             if lu is not None and not fresh:
@@ -153,13 +180,17 @@ class SquareSystem:
                     continue
             try:
                 _, J = self.evaluate(w, P)
+                self.floor = roundoff_floor(J, w)
+                floor = max(tolerance, self.floor)
                 lu, fresh = self.factorise(J), True
             except RuntimeError:
                 return ended(iteration, Status.SINGULAR)
+            before = residual
             w, g, accepted = self._line_search(w, g, lu.solve(g), P)
             fresh = False
             if not accepted:
-                return ended(iteration, Status.NO_DESCENT)
+                floored = residual <= floor
+                return ended(iteration, None if floored else Status.NO_DESCENT, floored=floored)
         return ended(max_iterations, Status.MAX_ITERATIONS)
 
     def _line_search(self, w, g, step, P, shortest=1 / 64):
@@ -174,19 +205,21 @@ class SquareSystem:
 
     # ------------------------------------------------------------------ sensitivities
     def _sensitivity_function(self):
-        if self._sensitivity is None:          # on the expanded (SX) residual: cheap to differentiate
+        if self._sensitivity is None:
             nlp = self.nlp
             w, P = ca.SX.sym("w", nlp.w.numel()), ca.SX.sym("P", nlp.P.numel())
-            g = self._residual_function(w, P)
             tip = nlp.outputs.expand()(w, P)[1][0:3, -1]
-            function = ca.Function("sensitivity", [w, P], [ca.jacobian(g, P), ca.jacobian(tip, w), ca.jacobian(tip, P)])
-            self._sensitivity = (BufferedFunction(function), [CscPattern(function.sparsity_out(k)) for k in range(3)])
+            function = ca.Function("tip_sensitivity", [w, P], [ca.jacobian(tip, w), ca.jacobian(tip, P)])
+            by_parameters = _parameter_jacobian(nlp, self._residual_function)
+            patterns = [by_parameters[1]] + [CscPattern(function.sparsity_out(k)) for k in range(2)]
+            self._sensitivity = (by_parameters[0], BufferedFunction(function), patterns)
         return self._sensitivity
 
     def _sensitivities(self, w, P):
         """``(dg/dP, dtip/dw, dtip/dP)`` as scipy sparse matrices (CSC)."""
-        function, patterns = self._sensitivity_function()
-        return [pattern.matrix(values) for pattern, values in zip(patterns, function(w, P))]
+        by_parameters, tip, patterns = self._sensitivity_function()
+        values = [by_parameters(w, P)[1]] + list(tip(w, P))
+        return [pattern.matrix(v) for pattern, v in zip(patterns, values)]
 
     def parameter_jacobian(self, w, P):
         """``dg/dP`` (sparse, (n, nP)) at ``(w, P)``."""
@@ -199,13 +232,35 @@ class SquareSystem:
         return Linearisation(g, J_w, J_P, T_w, T_P.toarray(), factorise=self.factorise)
 
 
+def _parameter_jacobian(nlp, residual):
+    """``(function (w, P) -> (g, nonzeros of dg/dP), CscPattern)``: through the rod equations
+    at one point where the NLP records them (:mod:`tca_casadi.discretisation.structure`), else
+    the expanded residual's symbolic Jacobian."""
+    if getattr(nlp, "rod_calls", None) is not None:
+        from ..discretisation.structure import StructuredJacobian
+        structured = StructuredJacobian(nlp, wrt="P")
+        return structured, CscPattern.of(structured.indptr, structured.indices, structured.shape)
+    w, P = ca.SX.sym("w", nlp.w.numel()), ca.SX.sym("P", nlp.P.numel())
+    g = residual(w, P)
+    function = ca.Function("parameter_jacobian", [w, P], [g, ca.jacobian(g, P)])
+    return BufferedFunction(function), CscPattern(function.sparsity_out(1))
+
+
 class CscPattern:
     """A CasADi sparsity pattern, to wrap a buffer of nonzeros as a scipy CSC matrix."""
 
     def __init__(self, sparsity):
-        colind, row = sparsity.get_ccs()
-        self.indptr, self.indices = np.array(colind), np.array(row)
-        self.shape = (sparsity.size1(), sparsity.size2())
+        if sparsity is not None:
+            colind, row = sparsity.get_ccs()
+            self.indptr, self.indices = np.array(colind), np.array(row)
+            self.shape = (sparsity.size1(), sparsity.size2())
+
+    @classmethod
+    def of(cls, indptr, indices, shape):
+        """The pattern of CSC arrays."""
+        pattern = cls(None)
+        pattern.indptr, pattern.indices, pattern.shape = np.asarray(indptr), np.asarray(indices), tuple(shape)
+        return pattern
 
     def matrix(self, values):
         return sp.csc_matrix((values.copy(), self.indices, self.indptr), shape=self.shape)
