@@ -433,7 +433,12 @@ def main(argv=None):
     parser.add_argument("-o", "--output", type=Path, default=ROOT / "results" / "bench.json")
     parser.add_argument("--muscles", action="store_true", help="only the other muscles' rows (results/bench_muscles.json)")
     parser.add_argument("--contact", action="store_true", help="only the contact rows (results/bench_contact.json)")
+    parser.add_argument("--scaling", action="store_true",
+                        help="only the growth with the mesh and the robot (scripts/scaling.py; results/bench_scaling.json)")
     args = parser.parse_args(argv)
+    if args.scaling:
+        from scaling import print_scaling, scaling
+        return _only(args, "scaling", scaling(args.quick), print_scaling)
     if args.muscles:
         return _muscles_only(args)
     if args.contact:

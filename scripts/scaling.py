@@ -3,7 +3,7 @@
 Two series, each point in a fresh process (its peak memory is its own):
 
 * the bending module on 24, 48, ... 768 intervals (``solver.intervals``, no refinement);
-* chains of 1, 2, 4, ... 16 bending modules, 6 intervals each.
+* chains of 1, 2, 4, ... 16 bending modules, 6 intervals each (TCAs 2 and 3 at 50 degC).
 
 Per point: the cold solve (build and continuation from the reference state), the warm solve
 after +1 degC on TCA 2 of the first module (``Simulation.solve(warm_start=...)``, median of
@@ -36,10 +36,12 @@ QUICK = {"intervals": (24, 48, 96), "modules": (1, 2, 4)}
 
 
 def chain(count):
-    """A scenario dict: ``count`` bending modules in series (6 intervals each), the tip probe
-    on the last."""
+    """A scenario dict: ``count`` bending modules in series (6 intervals each, TCAs 2 and 3 at
+    50 degC), the tip probe on the last."""
     raw = yaml.safe_load(BENDING.read_text())
     module = raw["modules"][0]
+    for actuator in module["actuators"][1:]:          # TCAs 2 and 3 at 50 degC: each module bends
+        actuator["temperature"] = 50                  # about 20 deg, a chain of 16 does not coil up
     raw["modules"] = [dict(copy.deepcopy(module), name=f"bending{k}") for k in range(count)]
     raw["loads"] = [dict(raw["loads"][0], module=f"bending{count - 1}")]
     for key in ("inverse", "sequence"):

@@ -200,10 +200,10 @@ def main(argv=None):
         print(f"error: {exc}", file=sys.stderr)
         return 1
     except (MemoryError, RuntimeError) as exc:
-        from .resources import available_memory, is_out_of_memory, readable_bytes
+        from .resources import is_out_of_memory, memory_limit
         if not is_out_of_memory(exc):
             raise
-        print(f"error: out of memory ({readable_bytes(available_memory() or 0)} available): the problem is too large for "
+        print(f"error: out of memory ({memory_limit()}): the problem is too large for "
               "this machine; lower solver.max_intervals or solver.intervals, the number of samples, steps or output "
               "times; no result was written", file=sys.stderr)
         return 1

@@ -65,5 +65,18 @@ def memory_guard(what, advice):
     except (MemoryError, RuntimeError) as error:
         if not is_out_of_memory(error):
             raise
-        raise ResourceError(f"out of memory while {what} ({readable_bytes(available_memory() or 0)} available); "
-                            f"{advice}") from None
+        raise ResourceError(f"out of memory while {what} ({memory_limit()}); {advice}") from None
+
+
+def memory_limit():
+    """What memory this process may have, for messages: its address-space limit (``ulimit -v``)
+    where one is set, else the memory available on the machine."""
+    try:
+        import resource
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+        if soft != resource.RLIM_INFINITY:
+            return f"this process may use at most {readable_bytes(soft)}: ulimit -v"
+    except (ImportError, OSError, ValueError):
+        pass
+    available = available_memory()
+    return f"{readable_bytes(available)} available" if available else "memory unknown"

@@ -255,7 +255,7 @@ class CollocationNLP:
         eq_scale = np.r_[np.ones(3), np.full(4, length), np.full(3, 1 / fs), np.full(3, length / fs)]
         self._g.append(ca.vec(ca.diag(ca.DM(eq_scale)) @ ca.vertcat(dX[0:7, :] - kin, eq)))
         if module.actuators:
-            per_interval = ca.DM(_quadrature_matrix(scheme, steps))         # (npts, n_int)
+            per_interval = _quadrature_matrix(scheme, steps)                 # (npts, n_int)
             partial = (speed * ca.DM(active)) @ per_interval                  # (nA, n_int)
             running = self._partials[m]                                       # (nA, n_int) cumulative
             before = ca.horzcat(ca.MX.zeros(len(module.actuators), 1), running[:, :-1])
@@ -354,9 +354,9 @@ class CollocationNLP:
         body-frame force and moment, per collocation point (:func:`model.loads.distributed_fields`
         of each interval, spread over its points)."""
         per_interval = [distributed_fields(self.robot, m, s, self.param) for s in s_mid]
-        spread = np.zeros((len(s_mid), interval_of.size))
-        spread[interval_of, np.arange(interval_of.size)] = 1.0
-        return [ca.horzcat(*[fields[k] for fields in per_interval]) @ ca.DM(spread) for k in range(4)]
+        points = interval_of.size
+        spread = ca.DM(ca.Sparsity.triplet(len(s_mid), points, interval_of.tolist(), list(range(points))), 1.0)
+        return [ca.horzcat(*[fields[k] for fields in per_interval]) @ spread for k in range(4)]
 
     # ------------------------------------------------------------------ point wrenches
     def _point_wrenches(self, m, s, before, after):
@@ -475,8 +475,9 @@ class CollocationNLP:
     def banded_columns(self):
         """A column order of ``w`` in which the Jacobian is block-banded: module by module,
         interval by interval, each interval's node states then its cumulative lengths (and any
-        per-interval unknowns a subclass adds, :meth:`_interval_columns`); the unknowns that
-        couple many intervals (tensions, contact forces, bodies) last. (n,) indices."""
+        per-interval unknowns a subclass adds, :meth:`_interval_columns`), each module's unknown
+        tensions after its intervals; the unknowns that couple modules (contact forces, bodies)
+        last. (n,) indices."""
         order = []
         for m, index in enumerate(self.state_index):
             running = self.partial_index[m].reshape(index.shape[0], -1) if self.partial_index[m].size else None
@@ -485,6 +486,10 @@ class CollocationNLP:
                 order.extend(self._interval_columns(m, i))
                 if running is not None:
                     order.append(running[i])
+            # the module's own unknown tensions after its intervals: their fill stays in the
+            # module's rows (at the very end, every row of the robot would fill them)
+            order.append(np.array([self.tension_index[k] for k, a in enumerate(self.robot.unknowns) if a.module == m],
+                                  int))
         first = np.concatenate(order) if order else np.zeros(0, int)
         rest = np.setdiff1d(np.arange(self.scale.size), first, assume_unique=False)
         return np.concatenate([first, rest]).astype(int)
@@ -511,27 +516,31 @@ def _breakpoint(nodes, s):
 
 
 def _derivative_matrix(scheme, steps):
-    """(n_int (d+1), n_int d): node values -> d/ds at the collocation points, per interval."""
-    d, n_int = scheme.degree, len(steps)
-    matrix = np.zeros((n_int * (d + 1), n_int * d))
-    for i, step in enumerate(steps):
-        matrix[i * (d + 1):(i + 1) * (d + 1), i * d:(i + 1) * d] = scheme.C[:, 1:] / step
-    return ca.sparsify(ca.DM(matrix))
+    """(n_int (d+1), n_int d): node values -> d/ds at the collocation points, per interval
+    (sparse: block diagonal)."""
+    d = scheme.degree
+    return _block_diagonal([scheme.C[:, 1:] / step for step in steps], d + 1, d)
 
 
 def _quadrature_matrix(scheme, steps):
-    """(n_int d, n_int): collocation-point values -> integral over each interval."""
-    d, n_int = scheme.degree, len(steps)
-    matrix = np.zeros((n_int * d, n_int))
-    for i, step in enumerate(steps):
-        matrix[i * d:(i + 1) * d, i] = step * scheme.weights
-    return matrix
+    """(n_int d, n_int): collocation-point values -> integral over each interval (sparse)."""
+    d = scheme.degree
+    return _block_diagonal([(step * scheme.weights)[:, None] for step in steps], d, 1)
 
 
 def _end_matrix(scheme, n_int):
-    """(n_int (d+1), n_int): node values -> value at each interval's end."""
+    """(n_int (d+1), n_int): node values -> value at each interval's end (sparse)."""
     d = scheme.degree
-    matrix = np.zeros((n_int * (d + 1), n_int))
-    for i in range(n_int):
-        matrix[i * (d + 1):(i + 1) * (d + 1), i] = scheme.D
-    return ca.sparsify(ca.DM(matrix))
+    return _block_diagonal([scheme.D[:, None]] * n_int, d + 1, 1)
+
+
+def _block_diagonal(blocks, rows, cols):
+    """A sparse DM with the dense ``blocks`` (each (rows, cols)) along its diagonal; built from
+    triplets, never dense (a fine mesh's dense matrix would not fit in memory)."""
+    count = len(blocks)
+    r, c = np.meshgrid(np.arange(rows), np.arange(cols), indexing="ij")
+    k = np.arange(count)[:, None, None]
+    row = (k * rows + r[None]).ravel().tolist()
+    col = (k * cols + c[None]).ravel().tolist()
+    values = np.concatenate([np.asarray(b, float).ravel() for b in blocks]) if count else np.zeros(0)
+    return ca.DM.triplet(row, col, ca.DM(values), count * rows, count * cols)

@@ -178,6 +178,8 @@ class SquareSystem:
                 if squared <= CHORD_CONTRACTION ** 2 * float(g @ g):
                     w, g = trial, g_trial
                     continue
+                if residual <= floor and self.floor > tolerance:    # at the roundoff floor: no step helps
+                    return ended(iteration, floored=True)
             try:
                 _, J = self.evaluate(w, P)
                 self.floor = roundoff_floor(J, w)

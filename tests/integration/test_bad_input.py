@@ -359,3 +359,44 @@ def _plan_of(capsys, args, directory, partial):
     finally:
         module._Stream.close = original
     return json.loads((directory / partial).read_text().splitlines()[0])["plan"].encode()
+
+
+# ----------------------------------------------------------------------------- out of memory
+def _limit_memory(megabytes):
+    def limit():
+        import resource
+        resource.setrlimit(resource.RLIMIT_AS, (megabytes * 2**20, resource.RLIM_INFINITY))
+    return limit
+
+
+def test_running_out_of_memory_is_one_line_and_writes_nothing(bending, tmp_path):
+    """2000 intervals under a 1 GiB address-space limit (ulimit -v), in a fresh process: one
+    line saying what was too big, what to change and what the limit is; exit 1; the results of
+    the run before stay as they were."""
+    import os
+    out = tmp_path / "out"
+    first = subprocess.run([sys.executable, "-m", "tca_casadi.cli", "solve", str(bending), "-o", str(out), "--no-plot"],
+                           capture_output=True, text=True)
+    assert first.returncode == 0, first.stderr
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+    run = subprocess.run([sys.executable, "-m", "tca_casadi.cli", "solve", str(bending), "--set", "solver.intervals=2000",
+                          "--set", "solver.refine=off", "-o", str(out), "--no-plot"], capture_output=True, text=True,
+                         env=env, preexec_fn=_limit_memory(1024), timeout=600)
+    assert run.returncode == 1, run.stderr[-2000:]
+    line = one_error_line(run.stderr)
+    assert line.startswith("error: out of memory while ") and "ulimit -v" in line and "solver.intervals" in line, line
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+
+
+def test_a_factorisation_that_runs_out_of_memory_says_its_size(capsys, bending, tmp_path, monkeypatch):
+    import scipy.sparse.linalg as spla
+
+    def no_memory(*args, **kwargs):
+        raise MemoryError
+    monkeypatch.setattr(spla, "splu", no_memory)
+    code, _, err = run(capsys, "solve", bending, "-o", tmp_path / "out", "--no-plot")
+    line = one_error_line(err)
+    assert code == 1 and "out of memory while factorising the Jacobian of 411 unknowns" in line, line
+    assert not (tmp_path / "out").exists()

@@ -21,3 +21,17 @@ def test_bench_quick_smoke(tmp_path, capsys):
     assert bending["tip_error_shooting_m"] < 1e-6
     assert bending["inverse_reduced_reached"] == "3/3" and bending["inverse_ipopt_reached"] == "3/3"
     assert "speedup_cold" in bending and "problem | unknowns" in capsys.readouterr().out
+
+
+def test_scaling_quick(tmp_path, capsys):
+    """``bench.py --scaling --quick``: every point converges in its own process, and the
+    printed table has its exponents."""
+    from bench import main
+    result = main(["--scaling", "--quick", "-o", str(tmp_path / "bench.json")])
+    for kind in ("intervals", "modules"):
+        rows = result[kind]["rows"]
+        assert len(rows) == 3 and all(row.get("converged") for row in rows), rows
+        assert all(row["unknowns"] > 0 and row["peak_rss_mb"] > 0 for row in rows)
+        assert result[kind]["exponents"]["warm_s"] is not None
+    out = capsys.readouterr().out
+    assert "exponents (larger half)" in out and (tmp_path / "bench_scaling.json").exists()
