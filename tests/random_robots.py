@@ -57,11 +57,8 @@ def _actuator(rng, a, length, diameter, stiffness):
     if span is not None and span[1] - span[0] < 0.2 * length:
         span = None
     kind = rng.choice(["straight", "helix", "curve"], p=[0.5, 0.3, 0.2])
-    if kind == "straight":
-        route = {"kind": "straight", "radius": radius, "angle": float(rng.uniform(0, 2 * math.pi))}
-    elif kind == "helix":
-        route = {"kind": "helix", "radius": radius, "turns": float(rng.choice([-1, 1]) * rng.uniform(0.2, 1.5)),
-                 "phase": float(rng.uniform(0, 2 * math.pi))}
+    if kind != "curve":
+        route = _placed_route(rng, kind, radius)
     else:
         s_a, s_b = span if span is not None else (0.0, length)
         s = np.linspace(s_a, s_b, 4)
@@ -75,6 +72,14 @@ def _actuator(rng, a, length, diameter, stiffness):
                 "temperature": float(rng.uniform(25, 70))}
     tension = float(rng.uniform(0.05, 0.5) * stiffness / (length * max(radius, 1e-3)))
     return {"name": f"t{a}", "kind": "tendon", "route": route, "tension": tension}
+
+
+def _placed_route(rng, kind, radius):
+    """A straight route at a random angle, or a helix of random turns and phase, at ``radius``."""
+    if kind == "straight":
+        return {"kind": "straight", "radius": radius, "angle": float(rng.uniform(0, 2 * math.pi))}
+    return {"kind": "helix", "radius": radius, "turns": float(rng.choice([-1, 1]) * rng.uniform(0.2, 1.5)),
+            "phase": float(rng.uniform(0, 2 * math.pi))}
 
 
 def _loads(rng, module, k):
@@ -165,11 +170,8 @@ def _full_length_tendon(rng, name, length, diameter, force):
     """A tendon along the whole module on a random route, driven by tension or displacement."""
     radius = float(rng.uniform(0.1, 0.35) * diameter)
     kind = rng.choice(["straight", "helix", "curve"], p=[0.3, 0.3, 0.4])
-    if kind == "straight":
-        route = {"kind": "straight", "radius": radius, "angle": float(rng.uniform(0, 2 * math.pi))}
-    elif kind == "helix":
-        route = {"kind": "helix", "radius": radius, "turns": float(rng.choice([-1, 1]) * rng.uniform(0.2, 1.5)),
-                 "phase": float(rng.uniform(0, 2 * math.pi))}
+    if kind != "curve":
+        route = _placed_route(rng, kind, radius)
     else:
         knots = int(rng.integers(4, 7))           # knots at least L / (2 knots) apart
         gaps = rng.uniform(1, 2, knots - 1)
