@@ -238,6 +238,46 @@ def dynamics_rate(name, dt, steps, jit=False):
             "newton_iterations": float(np.median(iterations)), "unknowns": int(dynamics.solver.nlp.scale.size)}
 
 
+def first_mode(t, x):
+    """Frequency [Hz] of ``x(t)`` from its upward crossings of its mean (linear interpolation
+    between samples; the first and last crossings span whole periods)."""
+    x = np.asarray(x, float) - np.mean(x)
+    up = np.flatnonzero((x[:-1] < 0) & (x[1:] >= 0))
+    if len(up) < 2:
+        return None
+    crossings = t[up] - x[up] * (t[up + 1] - t[up]) / (x[up + 1] - x[up])
+    return float((len(crossings) - 1) / (crossings[-1] - crossings[0]))
+
+
+def till_cantilever(duration, jit=False):
+    """The whole ``tca-casadi simulate`` call (a fresh process: import, build, static start, every
+    BDF2 step of 2 ms, the CSV and JSON; no plot or animation) on John Till's steel cantilever
+    (``scenarios/analytic/steel_cantilever.yaml``) for ``duration`` [s]: the wall time, the
+    real-time factor and the first mode's frequency from the tip's crossings of its mean, beside
+    Euler-Bernoulli's 5.596 Hz; ``jit``: with ``solver.jit`` (its compile, kept on disk, done
+    by a first run that is not timed)."""
+    import tempfile
+    command = [sys.executable, "-m", "tca_casadi.cli", "simulate", str(SCENARIOS / "analytic" / "steel_cantilever.yaml"),
+               "--dt", "0.002", "--set", f"duration={duration}", "--set", f"solver.jit={str(jit).lower()}",
+               "--no-plot", "--no-animation", "--quiet"]
+    with tempfile.TemporaryDirectory() as folder:
+        if jit:
+            subprocess.run(command + ["-o", folder], check=True, capture_output=True)
+        started = time.perf_counter()
+        subprocess.run(command + ["-o", folder], check=True, capture_output=True)
+        wall = time.perf_counter() - started
+        data = np.genfromtxt(Path(folder) / "timeseries.csv", delimiter=",", names=True)
+    return {"duration_s": duration, "jit": jit, "wall_s": wall, "real_time_factor": duration / wall,
+            "first_mode_hz": first_mode(data["t_s"], data["tip_x_m"]), "euler_bernoulli_hz": 5.596}
+
+
+def print_till(runs):
+    for r in runs:
+        print(f"dynamics, Till's steel cantilever (BDF2, 2 ms, {r['duration_s']:g} s, whole simulate call"
+              f"{', solver.jit' if r['jit'] else ''}): {r['wall_s']:.2f} s, {r['real_time_factor']:.2f}x real time; "
+              f"first mode {r['first_mode_hz']:.3f} Hz (Euler-Bernoulli {r['euler_bernoulli_hz']:.3f} Hz)")
+
+
 def study_rates(per_axis, design_per_length):
     """Samples per second of ``tca-casadi study`` on the bending module: the temperature box of
     its three TCAs (``per_axis``^3 grid samples, 25-125 degC) serially and on a pool of 2
@@ -433,12 +473,17 @@ def main(argv=None):
     parser.add_argument("-o", "--output", type=Path, default=ROOT / "results" / "bench.json")
     parser.add_argument("--muscles", action="store_true", help="only the other muscles' rows (results/bench_muscles.json)")
     parser.add_argument("--contact", action="store_true", help="only the contact rows (results/bench_contact.json)")
+    parser.add_argument("--dynamics", action="store_true",
+                        help="only the dynamics rows: Till's steel cantilever and the BDF2 step rates "
+                             "(results/bench_dynamics.json)")
     parser.add_argument("--scaling", action="store_true",
                         help="only the growth with the mesh and the robot (scripts/scaling.py; results/bench_scaling.json)")
     args = parser.parse_args(argv)
     if args.scaling:
         from scaling import print_scaling, scaling
         return _only(args, "scaling", scaling(args.quick), print_scaling)
+    if args.dynamics:
+        return _dynamics_only(args)
     if args.muscles:
         return _muscles_only(args)
     if args.contact:
@@ -459,8 +504,7 @@ def main(argv=None):
     cycle = simulate_cycle(1.0 if args.quick else 0.1, 1 if args.quick else 5)
     if not args.quick:                     # the compiled residual (its one-time compile not timed)
         cycle.update(simulate_cycle(0.1, 5, jit=True))
-    motion = {name: [dynamics_rate(name, dt, 5 if args.quick else 50, jit) for jit in ((False,) if args.quick else (False, True))
-                     for dt in (0.002, 0.01)] for name in (["bending module"] if args.quick else list(DYNAMIC_PROBLEMS))}
+    motion = dynamics_rates(args.quick)
     studies = study_rates(4, 4) if args.quick else study_rates(22, 20)
     muscles = muscle_rates(1, 11) if args.quick else muscle_rates(args.repeats, 35)
     checks = check_times(["bending_module"] if args.quick else
@@ -477,11 +521,7 @@ def main(argv=None):
           f"{cycle['simulate_real_time_factor']:.0f}x real time" + (
               f"; with solver.jit {cycle['simulate_jit_s']:.2f} s, {cycle['simulate_jit_real_time_factor']:.0f}x"
               if "simulate_jit_s" in cycle else ""))
-    for name, runs in motion.items():
-        print(f"dynamics (BDF2) {name}: " + ", ".join(
-            f"dt {r['dt_s'] * 1e3:g} ms{' jit' if r['jit'] else ''}: {r['step_s'] * 1e3:.2f} ms per step "
-            f"({r['newton_iterations']:g} Newton iterations), {r['real_time_factor']:.2f}x real time"
-            if r["step_s"] else f"dt {r['dt_s'] * 1e3:g} ms: failed ({r['message']})" for r in runs))
+    print_dynamics(motion)
     print(f"study: bending module temperature box, {studies['samples']} samples: serial "
           f"{studies['serial_samples_per_s']:.0f} samples/s, 2 processes {studies['processes_2_samples_per_s']:.0f} "
           f"samples/s (parallel efficiency {studies['parallel_efficiency']:.0%}); design study with rebuilt geometry "
@@ -503,6 +543,31 @@ def print_muscles(muscles):
               f"{'' if r['sweep_completed'] else ' (STOPPED)'}, check: collocation {r['collocation_s'] * 1e3:.1f} ms, "
               f"shooting {r['shooting_s'] * 1e3:.0f} ms, {'agree' if r['agree'] else 'DISAGREE'} "
               f"(tip {r['tip_difference_m']:.1e} m)")
+
+
+def dynamics_rates(quick):
+    """Per dynamic problem the BDF2 step rates (:func:`dynamics_rate`) and Till's cantilever's
+    whole ``simulate`` call (:func:`till_cantilever`: 0.5 s simulated in a quick run, else 25 s,
+    with and without ``solver.jit``)."""
+    motion = {name: [dynamics_rate(name, dt, 5 if quick else 50, jit) for jit in ((False,) if quick else (False, True))
+                     for dt in (0.002, 0.01)] for name in (["bending module"] if quick else list(DYNAMIC_PROBLEMS))}
+    motion["till"] = [till_cantilever(0.5 if quick else 25.0, jit) for jit in ((False,) if quick else (False, True))]
+    return motion
+
+
+def print_dynamics(motion):
+    for name, runs in motion.items():
+        if name == "till":
+            print_till(runs)
+            continue
+        print(f"dynamics (BDF2) {name}: " + ", ".join(
+            f"dt {r['dt_s'] * 1e3:g} ms{' jit' if r['jit'] else ''}: {r['step_s'] * 1e3:.2f} ms per step "
+            f"({r['newton_iterations']:g} Newton iterations), {r['real_time_factor']:.2f}x real time"
+            if r["step_s"] else f"dt {r['dt_s'] * 1e3:g} ms: failed ({r['message']})" for r in runs))
+
+
+def _dynamics_only(args):
+    return _only(args, "dynamics", dynamics_rates(args.quick), print_dynamics)
 
 
 def _muscles_only(args):

@@ -7,7 +7,8 @@ Two series, each point in a fresh process (its peak memory is its own):
 
 Per point: the cold solve (build and continuation from the reference state), the warm solve
 after +1 degC on TCA 2 of the first module (``Simulation.solve(warm_start=...)``, median of
-5), whether both converged, the number of unknowns and the process's peak resident memory.
+5) with its Newton iterations (chord steps included) and the time per iteration, whether both
+converged, the number of unknowns and the process's peak resident memory.
 The exponents are the slopes of log(cost) against log(size) over the larger half of the
 points (linear cost: 1).
 
@@ -69,16 +70,19 @@ def point(kind, size, repeats=5):
     sim = tc.Simulation.from_file(raw)
     cold = sim.solve(warn=False)
     cold_s = time.perf_counter() - started
-    times, warm = [], cold
+    times, iterations, warm = [], [], cold
     value = sim.get_parameter(path)
     for k in range(repeats):
         sim.set_parameter(path, value + 1.0 + 1e-3 * k)
         started = time.perf_counter()
         warm = sim.solve(warm_start=cold, warn=False)
         times.append(time.perf_counter() - started)
+        iterations.append(warm.result.nit)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return {"size": size, "unknowns": int(sim.solver().nlp.scale.size), "cold_s": cold_s,
-            "warm_s": statistics.median(times), "converged": bool(cold.converged and warm.converged),
+            "warm_s": statistics.median(times), "warm_iterations": statistics.median(iterations),
+            "warm_per_iteration_s": statistics.median(times) / max(statistics.median(iterations), 1),
+            "converged": bool(cold.converged and warm.converged),
             "peak_rss_mb": peak}
 
 
@@ -111,24 +115,28 @@ def scaling(quick=False):
         sizes = QUICK[kind] if quick else (INTERVALS if kind == "intervals" else MODULES)
         rows = [measure(kind, size) for size in sizes]
         out[kind] = {"rows": rows, "exponents": {key: exponent(rows, key)
-                                                 for key in ("cold_s", "warm_s", "peak_rss_mb")}}
+                                                 for key in ("cold_s", "warm_s", "warm_per_iteration_s",
+                                                             "peak_rss_mb")}}
     return out
 
 
 def print_scaling(result):
     for kind, label in (("intervals", "bending module, intervals"), ("modules", "chain of bending modules")):
         print(f"{label}:")
-        print(f"  {'size':>6} {'unknowns':>9} {'cold [s]':>9} {'warm [ms]':>10} {'peak [MB]':>10}")
+        print(f"  {'size':>6} {'unknowns':>9} {'cold [s]':>9} {'warm [ms]':>10} {'Newton its':>10} "
+              f"{'per it [ms]':>11} {'peak [MB]':>10}")
         for row in result[kind]["rows"]:
             if "failed" in row:
                 print(f"  {row['size']:>6}  failed: {row['failed']}")
                 continue
             flag = "" if row["converged"] else "  NOT CONVERGED"
             print(f"  {row['size']:>6} {row['unknowns']:>9} {row['cold_s']:>9.3f} {1e3 * row['warm_s']:>10.2f} "
+                  f"{row['warm_iterations']:>10.0f} {1e3 * row['warm_per_iteration_s']:>11.2f} "
                   f"{row['peak_rss_mb']:>10.0f}{flag}")
         exponents = result[kind]["exponents"]
         print("  exponents (larger half): " + ", ".join(
-            f"{key.split('_')[0]} {value:.2f}" if value is not None else f"{key.split('_')[0]} -"
+            f"{key.removesuffix('_s').removesuffix('_mb')} {value:.2f}" if value is not None
+            else f"{key.removesuffix('_s').removesuffix('_mb')} -"
             for key, value in exponents.items()))
 
 

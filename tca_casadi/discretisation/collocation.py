@@ -504,10 +504,15 @@ class CollocationNLP:
 
     def node_weights(self, m):
         """Quadrature weights [m] of every node of module m and of its end (n_int (d+1) + 1,):
-        the scheme's weights on the collocation points, zero at interval starts and at the end."""
-        steps = np.diff(np.array(self.meshes[m].intervals), axis=1).ravel()
-        weights = np.hstack([np.zeros((steps.size, 1)), steps[:, None] * self.scheme.weights[None, :]])
-        return np.append(weights.ravel(), 0.0)
+        the scheme's weights on the collocation points, zero at interval starts and at the end
+        (computed once; a read-only array)."""
+        cache = self.__dict__.setdefault("_node_weights", {})
+        if m not in cache:
+            steps = np.diff(np.array(self.meshes[m].intervals), axis=1).ravel()
+            weights = np.hstack([np.zeros((steps.size, 1)), steps[:, None] * self.scheme.weights[None, :]])
+            cache[m] = np.append(weights.ravel(), 0.0)
+            cache[m].flags.writeable = False
+        return cache[m]
 
 
 def _breakpoint(nodes, s):

@@ -679,10 +679,13 @@ class Damping(Strict):
 
 class Dynamics(Strict):
     """``simulate`` with the rods' inertia (issue 16): ``enabled``, the ``integrator``
-    (``bdf2`` or ``midpoint``) and optional ``damping``."""
+    (``bdf2`` or ``midpoint``), optional ``damping``, and how often the global force and
+    moment balance (inertial loads included) is checked: every ``balance_every`` steps, the
+    first and the last (1: every step)."""
     enabled: bool = False
     integrator: Literal["bdf2", "midpoint"] = "bdf2"
     damping: Optional[Damping] = None
+    balance_every: Annotated[int, Field(ge=1)] = 25
 
 
 class Scenario(Strict):

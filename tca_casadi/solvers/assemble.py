@@ -282,7 +282,7 @@ def _nearest_node(robot, shape, module_data):
 
 
 def build_solution(robot, params, module_data, tensions, lengths, result, method, raw, notices=(), extra_loads=None,
-                   contact_forces=None, clearance=None, bodies=None, frictions=None):
+                   contact_forces=None, clearance=None, bodies=None, frictions=None, check_balance=True):
     """Solution from ``module_data = [(s, states, base_wrench_body, weights), ...]``, tensions per
     actuator (list in ``robot.actuators`` order) and lengths; ``result`` the
     :class:`SolveStatus`, ``method`` the solver's name, ``raw`` its variables (``w`` or ``z``),
@@ -292,7 +292,8 @@ def build_solution(robot, params, module_data, tensions, lengths, result, method
     normal force of each of ``robot.contacts`` and ``clearance`` the solver's nearest approach
     to each obstacle and ``frictions`` the tangential forces and slips of the contacts against
     obstacles with friction (:func:`contact_results`); ``bodies`` the free bodies' unknowns
-    (:func:`body_results`)."""
+    (:func:`body_results`); ``check_balance`` False: no global balance (``balance`` None; a
+    time step between the scheduled checks of a dynamic run)."""
     robot = robot.at(params)          # stiffness, routes, laws at these parameters
     modules = [module_result(robot.modules[m], *data) for m, data in enumerate(module_data)]
     actuators = {}
@@ -312,8 +313,8 @@ def build_solution(robot, params, module_data, tensions, lengths, result, method
         contacts, pattern = contacts + grips, pattern + grip_pattern
         contact_loads = _merged(contact_loads or {}, grip_loads)
         warnings.extend(slipping)
-    balance = global_balance(robot, modules, params, tensions, extra_loads, contact_loads)
-    if result.success and balance.relative > BALANCE_TOLERANCE:
+    balance = global_balance(robot, modules, params, tensions, extra_loads, contact_loads) if check_balance else None
+    if balance is not None and result.success and balance.relative > BALANCE_TOLERANCE:
         warnings.append(PhysicsWarning("global_balance", f"global balance off by {balance.relative:.1e} of the forces in play "
                         f"(force {np.abs(balance.force).max():.2e} N, moment "
                         f"{np.abs(balance.moment).max():.2e} N m): the mesh is too coarse for this "

@@ -170,28 +170,29 @@ class CollocationSolver:
         """:class:`Linearisation` of the square system at scaled variables ``w`` and ``params``."""
         return self.square.linearise(w, params)
 
-    def solve_newton(self, params, w0, lu=None, search=True):
+    def solve_newton(self, params, w0, lu=None, search=True, balance=True):
         """Newton's method on the square system from scaled variables ``w0`` (a predictor):
         the same equations and tolerance as :meth:`solve`, without IPOPT's machinery (``lu``: a
-        factorised Jacobian from a nearby point for the first chord steps; ``search``: as in
-        :meth:`evaluate`)."""
+        factorised Jacobian from a nearby point for the first chord steps; ``search`` and
+        ``balance``: as in :meth:`evaluate`)."""
         params = np.asarray(params, dtype=float)
         w, status = self.square.newton(w0, params, self.options.tolerance, lu=lu)
         self.solve_count += 1
-        return self.evaluate(w, params, status, search)
+        return self.evaluate(w, params, status, search, balance)
 
-    def evaluate(self, w, params, status, search=True):
+    def evaluate(self, w, params, status, search=True, balance=True):
         """A :class:`Solution` from scaled variables ``w`` found by some algorithm (Newton, the
         pseudo-arclength corrector); ``status`` its :class:`SolveStatus` (a residual that is not
         a number is evaluated at ``(w, params)``); ``search`` False skips the search for contacts
         between candidates (:meth:`clearance`; continuation's intermediate steps: the nodes'
-        gaps stand in)."""
+        gaps stand in); ``balance`` False skips the global balance (the Solution's ``balance`` is
+        None)."""
         w, params = np.asarray(w, float), np.asarray(params, float)
         if not np.isfinite(status.residual):
             status = SolveStatus.judged(status.algorithm, self.max_residual(w, params), status.tolerance,
                                         status.status, nit=status.nit, solve_time_s=status.solve_time_s,
                                         detail=status.detail)
-        return self._assemble(w, params, status.replace(build_time_s=self.build_time_s), search)
+        return self._assemble(w, params, status.replace(build_time_s=self.build_time_s), search, balance)
 
     def max_residual(self, w, params):
         """Largest scaled constraint violation at ``(w, params)``."""
@@ -218,7 +219,7 @@ class CollocationSolver:
                            for m, module in enumerate(self.robot.modules)]
         return self._nodes
 
-    def _assemble(self, w, params, status, search=True):
+    def _assemble(self, w, params, status, search=True, balance=True):
         nlp = self.nlp
         lengths, ends, base = self._outputs_at(w, params)
         w_phys = w * nlp.scale
@@ -249,7 +250,8 @@ class CollocationSolver:
                                           f"{self.options.tolerance:.0e}: roundoff in the equations' terms on this "
                                           "mesh allows no less"))
         return build_solution(self.robot, robot_params, module_data, tensions, lengths.ravel(), status,
-                              self.method, {"w": w}, notices=notices, extra_loads=self._extra_loads(w, params, module_data),
+                              self.method, {"w": w}, notices=notices, check_balance=balance,
+                              extra_loads=self._extra_loads(w, params, module_data) if balance else None,
                               **contact)
 
     def clearance(self, w, params):

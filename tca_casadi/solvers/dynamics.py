@@ -198,18 +198,19 @@ class RodDynamics:
         c0 = {"bdf1": 1.0 / h, "bdf2": (1.0 + 2.0 * ratio) / ((1.0 + ratio) * h), "midpoint": 2.0 / h}[kind]
         return c0, histories
 
-    def step(self, params, h):
+    def step(self, params, h, balance=True):
         """Advance by ``h`` [s] to the robot parameters ``params`` (at the end of the step; the
         midpoint rule solves at the mean of the previous step's and these). Returns ``(state,
         solution)``: the node values at the end of the step and the solved point (the end, or
-        the midpoint for ``midpoint``), or ``(None, solution)`` if Newton did not converge."""
+        the midpoint for ``midpoint``), or ``(None, solution)`` if Newton did not converge;
+        ``balance`` False: the solution without its global balance (``balance`` None)."""
         now = self.states[-1]
         c0, histories = self._coefficients(h)
         params = np.asarray(params, float)
         solved_at = 0.5 * (params + now.params) if self.integrator == "midpoint" else params
         full = self.solver.parameters(solved_at, c0, self.damping, histories)
         guess = self._predicted(now.t + (0.5 * h if self.integrator == "midpoint" else h))
-        solution = self.solver.solve_newton(full, guess, lu=self._lu)
+        solution = self.solver.solve_newton(full, guess, lu=self._lu, balance=balance)
         self._lu = self.solver.square.last_lu           # chord steps of the next step start on it
         self.last_status = solution.result
         if not solution.converged:
@@ -277,7 +278,7 @@ class RodDynamics:
         h = state.t - previous.t
         histories = [-np.vstack(nodes) / h for nodes in previous.nodes]
         full = self.solver.parameters(state.params, 1.0 / h, self.damping, histories)
-        end = self.solver.evaluate(state.w, full, self.last_status)
+        end = self.solver.evaluate(state.w, full, self.last_status, balance=False)
         warnings = [w for w in end.warnings if w.kind != "global_balance"] + \
                    [w for w in solved.warnings if w.kind == "global_balance"]
         return replace(end, balance=solved.balance, warnings=warnings)

@@ -67,9 +67,9 @@ class EnergyAccount:
         self._work = {"actuator_work": 0.0, "load_work": 0.0, "dissipated_energy": 0.0}
         self._start = None
 
-    def stored(self, state, solution, masses=None):
-        """``(kinetic, elastic, gravitational)`` [J] at a state and its Solution (the point
-        masses from the parameters ``masses``, default the solution's)."""
+    def stored(self, state, solution):
+        """``(kinetic, elastic, gravitational)`` [J] at a state and its Solution, and the rigid
+        point masses' share of their sum."""
         robot, params = self.dynamics.sim.robot, solution.parameters
         kinetic, elastic = self.dynamics.energies(state, params)
         gravity = params[robot.layout["gravity"]]
@@ -78,8 +78,8 @@ class EnergyAccount:
         for m, result in enumerate(solution.modules):
             mass, _ = inertia_per_length(robot.modules[m], param)
             potential -= float(mass * (gravity @ result.p) @ result.weights)
-        rigid_kinetic, rigid_potential = self.dynamics.rigid_energies(state, solution, masses)
-        return kinetic + rigid_kinetic, elastic, potential + rigid_potential
+        rigid_kinetic, rigid_potential = self.dynamics.rigid_energies(state, solution)
+        return (kinetic + rigid_kinetic, elastic, potential + rigid_potential), rigid_kinetic + rigid_potential
 
     def add(self, previous, state, solution, previous_solution, during=None):
         """Account for the step from ``previous`` to ``state`` (StepStates, with their
@@ -96,10 +96,11 @@ class EnergyAccount:
                                                for k, a in solution.actuators.items())
             self._work["load_work"] += _load_work(robot, previous_solution, solution, during)
             self._work["dissipated_energy"] += self._dissipated(previous, state)
-        stored = self.stored(state, solution)
-        if previous is not None:            # a point mass that changed (an object let go or taken) takes or brings its energy
-            kept = self.stored(state, solution, previous_solution.parameters)
-            self._work["load_work"] += sum(stored) - sum(kept)
+        stored, rigid = self.stored(state, solution)
+        if previous is not None and not np.array_equal(solution.parameters, previous_solution.parameters):
+            # a point mass that changed (an object let go or taken) takes or brings its energy
+            kept = self.dynamics.rigid_energies(state, solution, previous_solution.parameters)
+            self._work["load_work"] += rigid - sum(kept)
         if self._start is None:
             self._start = sum(stored)
         balance = (sum(stored) - self._start + self._work["dissipated_energy"] - self._work["actuator_work"]
@@ -150,8 +151,10 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
     at ``initial`` (default ``path[0]``; the parameters before an event at the first output
     time), then one implicit step per output time
     (halved up to :data:`HALVINGS` times when Newton fails: the run stops, with the solutions
-    up to there, when even that fails). Adds ``series.tip_velocities`` (n, 3) [m/s] and
-    ``series.energies`` (n, 7) [J] (:data:`ENERGY_COLUMNS`)."""
+    up to there, when even that fails). The global balance is checked at the first step, every
+    ``dynamics.balance_every`` steps and the last (the other steps' solutions have ``balance``
+    None). Adds ``series.tip_velocities`` (n, 3) [m/s] and ``series.energies`` (n, 7) [J]
+    (:data:`ENERGY_COLUMNS`)."""
     config = sim.scenario.dynamics
     base = sim.params.copy()
     try:
@@ -173,7 +176,8 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
         first = replace(first, loads=load_markers(sim.robot.at(path[0]), first.modules, path[0]))
     for k in range(1, len(path)):
         previous, previous_solution = state, (first if k == 1 else series.solutions[-1])
-        state, solution = _advance(dynamics, path[k - 1], path[k], series.t[k] - series.t[k - 1])
+        checked = k == 1 or k % config.balance_every == 0 or k == len(path) - 1
+        state, solution = _advance(dynamics, path[k - 1], path[k], series.t[k] - series.t[k - 1], checked)
         if state is None:
             series.message = (f"stopped at t = {series.t[k]:g} s: the step from t = {series.t[k - 1]:g} s did not "
                               f"converge even halved {HALVINGS} times ({solution.message})")
@@ -193,17 +197,18 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
     return series
 
 
-def _advance(dynamics, start, end, h):
+def _advance(dynamics, start, end, h, balance=True):
     """From the current state (at parameters ``start``) over ``h`` to parameters ``end``: one
     step, or 2, 4, ... equal substeps (parameters linear in between) when Newton fails.
-    ``(state, solution)``; ``state`` None if the last attempt failed."""
+    ``(state, solution)``; ``state`` None if the last attempt failed; ``balance``: check the
+    last substep's global balance."""
     start, end = np.asarray(start, float), np.asarray(end, float)
     saved = dynamics.checkpoint()
     for halving in range(HALVINGS + 1):
         count = 2 ** halving
         dynamics.restore(saved)
         for j in range(1, count + 1):
-            state, solution = dynamics.step(start + (end - start) * j / count, h / count)
+            state, solution = dynamics.step(start + (end - start) * j / count, h / count, balance and j == count)
             if state is None:
                 break
         else:

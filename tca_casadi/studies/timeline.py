@@ -338,8 +338,10 @@ class TimeSimulation:
                 "warnings": [str(w) for w in series.warnings]}
 
     def _dynamics_report(self, series):
-        """The integrator, the peak tip speed [m/s] and the energy balance's worst residual [J]
-        (and relative to the largest stored energy), or None for a quasi-static run."""
+        """The integrator, the peak tip speed [m/s], the energy balance's worst residual [J]
+        (and relative to the largest stored energy) and the global balance's worst relative
+        residual over the steps where it was checked (``dynamics.balance_every``), or None for
+        a quasi-static run."""
         config = self.sim.scenario.dynamics
         if not config.enabled or getattr(series, "energies", None) is None or not len(series.energies):
             return None
@@ -349,7 +351,10 @@ class TimeSimulation:
         stored = float(np.max(energies[:, 0] + energies[:, 1]) + np.max(np.abs(energies[:, 2] - energies[0, 2]))
                        + np.max(np.abs(energies[:, 3:6])))
         worst = float(np.max(np.abs(energies[:, ENERGY_COLUMNS.index("energy_balance")])))
-        return {"integrator": config.integrator, "damping": None if config.damping is None else
+        checked = [s.balance.relative for s in series.solutions if s.balance is not None]
+        return {"global_balance_checked": len(checked), "global_balance_every": config.balance_every,
+                "global_balance_worst": float(max(checked)) if checked else None,
+"integrator": config.integrator, "damping": None if config.damping is None else
                 config.damping.model_dump(), "peak_tip_speed": float(np.max(np.linalg.norm(series.tip_velocities, axis=1))),
                 "energy_balance_residual": worst, "energy_balance_relative": worst / stored if stored > 0 else 0.0,
                 "final": {name: float(energies[-1, k]) for k, name in enumerate(ENERGY_COLUMNS)}}
@@ -414,6 +419,11 @@ class TimeSimulation:
             motion = report["dynamics"]
             lines.append(f"  dynamics ({motion['integrator']}): peak tip speed {motion['peak_tip_speed'] * 1e3:.4g} mm/s, "
                          f"energy balance {motion['energy_balance_relative']:.1e} of the energy in play")
+            if motion["global_balance_checked"]:
+                lines.append(f"  global balance checked at {motion['global_balance_checked']} of "
+                             f"{len(series.solutions)} outputs (the start, the first step, every "
+                             f"{motion['global_balance_every']}th and the last; dynamics.balance_every): worst {motion['global_balance_worst']:.1e} of the "
+                             "forces in play")
         lines += [f"  warning: {w}" for w in report["warnings"]]
         return "\n".join(lines)
 

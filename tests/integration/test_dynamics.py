@@ -168,7 +168,7 @@ modules:
 loads:
   - {name: hold, kind: point, module: upper, at: end, force: ["2 mN", "1 mN", 0]}
 solver: {intervals: 6, refine: off}
-dynamics: {enabled: true, integrator: midpoint}
+dynamics: {enabled: true, integrator: midpoint, balance_every: 1}
 duration: 1.5 s
 timeline:
   - {at: 0 s, set: {hold.force: [0, 0, 0]}}

@@ -27,7 +27,7 @@ def _stepped(seed, integrator):
                 changes[f"{key}.tension"] = 1.3 * actuator["tension"]
     sim = Simulation.from_file(scenario)
     step = 0.2 * min(time_scale(m) for m in sim.robot.modules)
-    scenario.update(dynamics={"enabled": True, "integrator": integrator}, duration=40 * step,
+    scenario.update(dynamics={"enabled": True, "integrator": integrator, "balance_every": 1}, duration=40 * step,
                     timeline=[{"at": 0.0, "set": changes, "ramp": 10 * step}])
     timed = TimeSimulation(Simulation.from_file(scenario), dt=step)
     return timed, timed.run()

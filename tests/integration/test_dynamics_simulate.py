@@ -27,9 +27,13 @@ def _sets(items):
 def test_release_files_and_energy_account(tmp_path, capsys):
     assert main(["simulate", CANTILEVER, *_sets(RELEASE), "--dt", "0.005", "-o", str(tmp_path), "--quiet",
                  "--no-animation"]) == 0
-    assert "dynamics, midpoint" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "dynamics, midpoint" in out
+    assert "global balance checked at 18 of 401 outputs (the start, the first step, every 25th and the last" in out
     report = json.loads((tmp_path / "simulation.json").read_text())["dynamics"]
     assert report["integrator"] == "midpoint" and report["energy_balance_relative"] < 1e-8
+    # the static start and 400 steps: the balance there and at steps 1, 25, 50, ..., 400 (the last)
+    assert report["global_balance_checked"] == 18 and report["global_balance_worst"] < 1e-8
     data = np.genfromtxt(tmp_path / "timeseries.csv", delimiter=",", names=True)
     assert data["tip_x_m"][0] == pytest.approx(0.8695e-3, rel=1e-3) and data["tip_vx_ms"][0] == 0.0   # held, at rest
     total = data["kinetic_energy_J"] + data["elastic_energy_J"]
@@ -124,9 +128,9 @@ def test_a_step_that_fails_is_halved_and_a_run_that_cannot_go_on_says_why(monkey
     real = RodDynamics.step
     taken = []
 
-    def fragile(self, params, h):
+    def fragile(self, params, h, balance=True):
         taken.append(h)
-        return (None, real(self, params, h)[1]) if h > 0.004 else real(self, params, h)
+        return (None, real(self, params, h, balance)[1]) if h > 0.004 else real(self, params, h, balance)
 
     settings = [RELEASE[0].replace("midpoint", "bdf2"), "duration=0.05", RELEASE[2]]
     monkeypatch.setattr(RodDynamics, "step", fragile)
@@ -135,7 +139,7 @@ def test_a_step_that_fails_is_halved_and_a_run_that_cannot_go_on_says_why(monkey
     monkeypatch.setattr(RodDynamics, "step", real)
     fine = TimeSimulation(Simulation.from_file(CANTILEVER, settings), dt=0.0025).run()
     assert_allclose(halved.tip_positions(), fine.tip_positions()[::4], rtol=0, atol=1e-12)
-    monkeypatch.setattr(RodDynamics, "step", lambda self, params, h: (None, real(self, params, h)[1]))
+    monkeypatch.setattr(RodDynamics, "step", lambda self, params, h, balance=True: (None, real(self, params, h)[1]))
     stuck = TimeSimulation(Simulation.from_file(CANTILEVER, settings), dt=0.01).run()
     assert not stuck.completed and len(stuck.solutions) == 1
     assert "did not converge even halved 6 times" in stuck.message
