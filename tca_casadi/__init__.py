@@ -21,7 +21,8 @@ _LAZY = {"Simulation": ".simulation", "solve": ".simulation", "Solution": ".solu
          "load_scenario": ".scenario", "Robot": ".model", "TcaLaw": ".model",
          "TimeSimulation": ".studies.timeline", "simulate": ".studies.timeline",
          "Study": ".studies.study", "StudyResult": ".studies.study_result",
-         "Fit": ".studies.fit", "FitResult": ".studies.fit_result"}
+         "Fit": ".studies.fit", "FitResult": ".studies.fit_result",
+         "Plan": ".control", "PlanResult": ".control"}
 
 __all__ = list(_LAZY) + ["ScenarioError", "SolverError", "ModelError", "OutputError", "TcaError",
                          "PhysicsWarning"]

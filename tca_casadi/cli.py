@@ -1,4 +1,4 @@
-"""Command line: ``tca-casadi validate|solve|check|sweep|inverse|sequence|simulate|study|fit SCENARIO ...``.
+"""Command line: ``tca-casadi validate|solve|check|sweep|inverse|sequence|simulate|plan|study|fit SCENARIO ...``.
 
 Exit codes: 0 success, 1 the solver did not converge (``check``: the solvers disagree),
 2 bad input (one line on stderr). ``sweep``: 1 when the run stopped before the stop value;
@@ -125,10 +125,37 @@ def build_parser():
                           help="output directory (default: results/<scenario name>/simulate)")
     simulate.add_argument("--duration", default=None, help="[s] (units allowed: '30 s'); default the scenario's")
     simulate.add_argument("--dt", default="0.1", help="output step [s] (default 0.1); with dynamics, the time step")
+    simulate.add_argument("--timeline", type=Path, default=None, metavar="YAML",
+                          help="a file with a timeline (and optionally a duration) that replaces the scenario's, "
+                               "e.g. a plan's plan_timeline.yaml")
     simulate.add_argument("--no-plot", action="store_true", help="no timeseries.png")
     simulate.add_argument("--no-animation", action="store_true",
                           help="no simulate.gif / simulate.mp4 (the robot in time, with a clock)")
     simulate.add_argument("--quiet", action="store_true", help="no progress bar")
+
+    plan = commands.add_parser("plan", help="optimal heating schedule: the TCA powers over time that bring the tip "
+                               "to a target fastest or with the least energy; plan.csv, plan.json, plan.png")
+    _scenario_arguments(plan)
+    plan.add_argument("--target-position", nargs=3, metavar=("X", "Y", "Z"),
+                      help="target tip position [m] (or with units, '12 mm'); time and energy")
+    plan.add_argument("--path", type=Path, default=None, metavar="CSV",
+                      help="track: the tip path, a CSV with columns t [s], x, y, z [m] (units in the header)")
+    plan.add_argument("--objective", choices=["time", "energy", "track"], default="time",
+                      help="time (default): reach the target as early as the bounds allow and hold it; energy: "
+                           "hold it from --by on with the least electrical energy; track: follow --path")
+    plan.add_argument("--horizon", default="30", help="[s] from t = 0 (units allowed; default 30 s)")
+    plan.add_argument("--nodes", type=int, default=60, help="time steps on the horizon (default 60)")
+    plan.add_argument("--by", default=None, help="energy: the time [s] from which the target is held (default the "
+                                                 "horizon's end)")
+    plan.add_argument("--vary", action="append", default=None, metavar="PATH",
+                      help="a heated TCA's drive value to plan (MODULE.TCA.drive.value; repeatable; default every "
+                           "heated TCA's)")
+    plan.add_argument("--bounds", nargs=2, metavar=("LO", "HI"),
+                      help="bounds of the powers [W] (units allowed; default 0 to the power that holds each TCA "
+                           "at its type's max_temperature)")
+    plan.add_argument("--tolerance", default=None, metavar="M",
+                      help="distance from the target within which it counts as reached (default 0.1 mm)")
+    _output_arguments(plan, "plan", "plan.png")
 
     study = commands.add_parser("study", help="solve many samples (workspace maps, Monte Carlo, design sweeps) "
                                 "serially, on local processes or a Dask cluster; study.parquet, study.csv, plots")
@@ -353,14 +380,8 @@ def _sweep(args):
 def _inverse(args):
     from .simulation import Simulation
     from .studies.inverse import InverseStatics, Target, read_targets, write_path_results
-    from .units import to_si
     sim = Simulation.from_file(Path(args.scenario), args.overrides, allow_code=args.allow_code)
-    tolerance = None
-    if args.tolerance is not None:
-        try:
-            tolerance = to_si(_number(args.tolerance), "length")
-        except ValueError as exc:
-            raise ScenarioError(f"--tolerance: {exc}") from None
+    tolerance = None if args.tolerance is None else _quantities([args.tolerance], "length", "--tolerance")[0]
     solver = InverseStatics.from_scenario(sim, vary=args.vary, bounds=args.bounds, tolerance=tolerance,
                                           starts=args.starts, method=args.method)
     files = ["inverse_path.csv"] if args.path is not None else ["inverse.json", "solution.json",
@@ -380,10 +401,7 @@ def _inverse(args):
     if args.target_position is None:
         target = solver.scenario_target(args.point)
     else:
-        try:
-            position = [to_si(_number(v), "length") for v in args.target_position]
-        except ValueError as exc:
-            raise ScenarioError(f"--target-position: {exc}") from None
+        position = _quantities(args.target_position, "length", "--target-position")
         target = Target.create(position, args.target_direction, args.target_orientation, args.point or "tip")
     with run:
         result = solver.solve(target)
@@ -429,6 +447,16 @@ def _results(args, sim, command, files, stale=(), default=None):
 def _median(values):
     import statistics
     return statistics.median(values)
+
+
+def _quantities(values, kind, option):
+    """SI values of command-line numbers or quantities with units (``'12 mm'``) of ``kind``;
+    a bad one is a ScenarioError naming ``option``."""
+    from .units import to_si
+    try:
+        return [to_si(_number(v), kind) for v in values]
+    except ValueError as exc:
+        raise ScenarioError(f"{option}: {exc}") from None
 
 
 def _number(text):
@@ -500,7 +528,8 @@ def _simulate(args):
     from .simulation import Simulation
     from .studies.timeline import TimeSimulation
     from .units import to_si
-    sim = Simulation.from_file(Path(args.scenario), args.overrides, allow_code=args.allow_code)
+    overrides = list(args.overrides) + ([] if args.timeline is None else _timeline_overrides(args.timeline))
+    sim = Simulation.from_file(Path(args.scenario), overrides, allow_code=args.allow_code)
     try:
         duration = None if args.duration is None else to_si(args.duration, "time")
         dt = to_si(args.dt, "time")
@@ -528,6 +557,54 @@ def _simulate(args):
             print(f"animation at {'real time' if speed_up == 1 else f'{speed_up}x real time'}")
     print("wrote " + ", ".join(str(p) for p in run.final(written)))
     return 0 if series.completed else 1
+
+
+def _timeline_overrides(path):
+    """``--set`` overrides from a ``--timeline`` file: its ``timeline`` (and ``duration``)."""
+    import json
+
+    from .scenario.yaml_safe import parse_yaml
+    from .tables import read_text
+    data, _ = parse_yaml(read_text(path, "--timeline", "timeline YAML"), str(path))
+    if not isinstance(data, dict) or not isinstance(data.get("timeline"), list):
+        raise ScenarioError(f"--timeline {path}: expected a mapping with a 'timeline' list (and optionally a 'duration')")
+    extra = set(data) - {"timeline", "duration"}
+    if extra:
+        raise ScenarioError(f"--timeline {path}: unknown key(s) {', '.join(sorted(map(str, extra)))}; "
+                            "a timeline file holds 'timeline' and 'duration'")
+    out = [f"timeline={json.dumps(data['timeline'])}"]
+    if "duration" in data:
+        out.append(f"duration={json.dumps(data['duration'])}")
+    return out
+
+
+def _plan(args):
+    from .control import Plan
+    from .simulation import Simulation
+    sim = Simulation.from_file(Path(args.scenario), args.overrides, allow_code=args.allow_code)
+    from .control.plan import read_path
+    if args.objective == "track":
+        if args.path is None or args.target_position is not None:
+            raise ScenarioError("plan --objective track follows a --path CSV (and takes no --target-position)")
+        target = read_path(args.path)
+    else:
+        if args.target_position is None or args.path is not None:
+            raise ScenarioError(f"plan --objective {args.objective} needs --target-position X Y Z "
+                                "(a --path is for --objective track)")
+        target = _quantities(args.target_position, "length", "--target-position")
+    options = {name: _quantities([getattr(args, name)], kind, f"--{name}")[0]
+               for name, kind in (("horizon", "time"), ("by", "time"), ("tolerance", "length"))
+               if getattr(args, name) is not None}
+    if args.bounds is not None:
+        options["bounds"] = _quantities(args.bounds, "power", "--bounds")
+    planner = Plan(sim, target, objective=args.objective, nodes=args.nodes, vary=args.vary, **options)
+    with _results(args, sim, "plan", ["plan.csv", "plan.json", "plan_timeline.yaml", "plan.png"],
+                  stale=["plan.png"] if args.no_plot else [], default="plan") as run:
+        result = _with_progress(planner.solve, "plan", quiet=args.quiet)
+        written = result.save(run.staging, plot=not args.no_plot)
+    print(result.summary())
+    print("wrote " + ", ".join(str(p) for p in run.final(written)))
+    return 0 if result.converged and result.reached else 1
 
 
 def _study(args):
@@ -634,7 +711,8 @@ def _vary_spec(text, option):
 
 
 COMMANDS = {"validate": _validate, "solve": _solve, "check": _check, "sweep": _sweep,
-            "inverse": _inverse, "sequence": _sequence, "simulate": _simulate, "study": _study, "fit": _fit}
+            "inverse": _inverse, "sequence": _sequence, "simulate": _simulate, "plan": _plan, "study": _study,
+            "fit": _fit}
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -50,6 +50,20 @@ class Table:
                                 "(NaN and infinite values are not data)")
         return value
 
+    def quantity(self, k, column, kind):
+        """The number in row ``k``, ``column`` (index) in SI, read in the unit its header gives
+        (``x [mm]``; none: SI already), of ``kind`` (``length``, ``force``, ``time``...)."""
+        from .units import UNIT_OF, ureg
+        value = self.number(k, column)
+        unit = unit_of(self.header[column])
+        if unit is None:
+            return value
+        try:
+            return float(ureg.Quantity(value, unit).to(UNIT_OF[kind]).magnitude)
+        except Exception:                           # pint: undefined unit or wrong dimension
+            raise ScenarioError(f"{self.option}: column {self.header[column]!r}: [{unit}] is not a unit of {kind} "
+                                f"({UNIT_OF[kind]})") from None
+
     def column(self, column):
         """Every row's number in ``column`` (index), as a list."""
         return [self.number(k, column) for k in range(len(self.rows))]

@@ -222,3 +222,23 @@ def integrate(laws, drives, ambient, initial, outputs, coupling=None, rtol=1e-11
                       for t, y in zip(outputs, states)]).reshape(outputs.size, count)
     return ThermalHistory(outputs, temperature, power, states[:, count:2 * count], states[:, 2 * count:3 * count],
                           capacity, states[:, 4 * count:])
+
+
+def zero_order_hold(laws, ambient, step, coupling=None):
+    """The exact discretisation of the lumped model under powers held constant over a step:
+    ``T(t + h) = Phi T(t) + Gamma P + offset`` for ``C dT/dt = P - G (T - T_amb) - L T``
+    (``laws``: :class:`ThermalLaw` s, ``L`` the :func:`exchange_matrix` of ``coupling``).
+    With ``A = -C^-1 (diag G + L)``: ``Phi = exp(A h)``, ``Gamma = int_0^h exp(A s) ds C^-1``
+    and ``offset = Gamma G T_amb``, from one matrix exponential of the augmented system
+    (Van Loan). Returns ``(Phi, Gamma, offset)``: (n, n), (n, n), (n,)."""
+    from scipy.linalg import expm
+    count = len(laws)
+    capacity = np.array([law.heat_capacity for law in laws])
+    conductance = np.array([law.conductance for law in laws])
+    A = -(np.diag(conductance) + exchange_matrix(coupling, count)) / capacity[:, None]
+    augmented = np.zeros((2 * count, 2 * count))
+    augmented[:count, :count] = A * step
+    augmented[:count, count:] = np.diag(1.0 / capacity) * step
+    exponential = expm(augmented)
+    Phi, Gamma = exponential[:count, :count], exponential[:count, count:]
+    return Phi, Gamma, Gamma @ (conductance * ambient)

@@ -34,13 +34,11 @@ import numpy as np
 from ..discretisation.measurements import measurable_names, measurement_function, quantity_kind
 from ..errors import ScenarioError, TcaError
 from ..scenario.checks import closest
-from ..units import ureg
 from .design import nearest_neighbour_order
 from .parameters import resolve_parameter
 
 #: default standard deviations of the measurements, per kind [m, N]
 DEFAULT_SIGMAS = {"length": 1e-4, "force": 1e-3}
-SI_UNITS = {"length": "m", "force": "N"}
 #: Fisher information condition numbers above this are reported (parameters not told apart)
 CONDITION_LIMIT = 1e10
 #: a direction whose singular value is below this fraction of the largest is unidentifiable
@@ -134,15 +132,9 @@ def _split_unit(text):
 
 
 def _number(table, k, column, unit, kind):
-    """A measured value in SI (m or N) from row ``k``, ``column`` of ``table`` and the column's unit."""
-    value = table.number(k, column)
-    if unit is None:
-        return value
-    try:
-        return float(ureg.Quantity(value, unit).to(SI_UNITS[kind]).magnitude)
-    except Exception:                           # pint: undefined unit or wrong dimension
-        raise ScenarioError(f"fit --data: column {table.header[column]!r}: [{unit}] is not a unit of {kind} "
-                            f"({SI_UNITS[kind]})") from None
+    """A measured value in SI (m or N) from row ``k``, ``column`` of ``table`` in the column's
+    unit (:meth:`~tca_casadi.tables.Table.quantity`)."""
+    return table.quantity(k, column, kind)
 
 
 def _input(table, k, column, unit, parameter):

@@ -146,3 +146,21 @@ def test_fixed_steps_converge_at_the_order_of_dop853():
     orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
     assert errors[-1] > 1e-11                                          # still above the reference's error
     assert np.all((orders > 7.5) & (orders < 9.0)), (errors, orders)
+
+
+def test_zero_order_hold_is_the_exact_step_of_the_coupled_model():
+    """Three coupled TCAs with different constants and powers held over 0.7 s: the matrix
+    exponential's step against DOP853 at 1e-12, and against the closed form of one uncoupled
+    TCA, T_amb + P/G + (T0 - T_amb - P/G) exp(-h G/C)."""
+    from tca_casadi.solvers.thermal import zero_order_hold
+    laws = [ThermalLaw(0.12, 0.007), ThermalLaw(0.2, 0.004), ThermalLaw(0.05, 0.009)]
+    coupling = np.array([[0, 0.002, 0.0], [0.002, 0, 0.001], [0.0, 0.001, 0]])
+    T0, P, h = np.array([40.0, 25.0, 31.0]), np.array([0.3, 0.0, 0.12]), 0.7
+    Phi, Gamma, offset = zero_order_hold(laws, 22.0, h, coupling)
+    drives = [Drive("power", Schedule.constant(p)) for p in P]
+    reference = integrate(laws, drives, 22.0, T0, [0.0, h], coupling, rtol=1e-13, atol=1e-13).temperature[-1]
+    assert_allclose(Phi @ T0 + Gamma @ P + offset, reference, rtol=0, atol=1e-10)
+    Phi, Gamma, offset = zero_order_hold(laws[:1], 22.0, h)
+    C, G = laws[0].heat_capacity, laws[0].conductance
+    closed = 22.0 + P[0] / G + (T0[0] - 22.0 - P[0] / G) * np.exp(-h * G / C)
+    assert_allclose(Phi @ T0[:1] + Gamma @ P[:1] + offset, [closed], rtol=0, atol=1e-12)

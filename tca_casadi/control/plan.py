@@ -1,0 +1,531 @@
+"""Optimal heating schedules (``tca-casadi plan``, issue 32): which electrical powers, over time,
+bring the tip to a target and keep it there, from the same model that ``simulate`` runs.
+
+The formulation (``docs/control.md`` derives it):
+
+* a time grid ``t_k = k h``, ``k = 0..N``, ``h = horizon / N``; the varied inputs ``u_k``
+  (powers [W] of ``power`` drives) held constant on ``[t_k, t_{k+1})`` (zero-order hold: what
+  a timeline of steps in ``simulate`` applies);
+* the heated TCAs' temperatures from the exact discretisation of the lumped thermal model,
+  ``T_{k+1} = Phi T_k + Gamma P_k + offset`` (:func:`~tca_casadi.solvers.thermal.zero_order_hold`),
+  from the steady state of the scenario's drives at t = 0: ``T = T_free + M u``, linear in the
+  inputs;
+* at every node the robot's equilibrium at those temperatures (Newton on the built collocation
+  system, warm from the last evaluation; continuation where Newton fails): every iterate is an
+  equilibrium, and the tip's derivatives follow from the implicit function theorem
+  (``dtip_k/du = dtip/dT (T_k) M_k``, one sparse LU per node);
+* objectives: ``time``, least squares of the tip's error at every node from t = 0 with the
+  inputs bounded (the error falls as fast as the bounds allow and then stays: for one heated
+  TCA that is the bang-bang minimum-time input, full power then the holding power
+  ``G (T* - T_amb)``); ``energy``, the least electrical energy ``sum_k h u_k`` with the error
+  within the tolerance at every node from ``by`` on (scipy's SLSQP, started from the ``time``
+  plan); ``track``, least squares of the tip's distance from a path ``p*(t)`` (given at times,
+  linear in between) at every node. All keep every temperature at or below its type's
+  ``max_temperature``.
+
+``reached_at_s`` is the first node time from which the tip stays within the tolerance (of the
+target, or of the path where it is at that time).
+"""
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ScenarioError
+from ..solvers.thermal import steady_state, zero_order_hold
+from ..status import SolveStatus, Status
+
+#: the drive kinds a plan varies and can hold (their power does not depend on the temperature)
+PLANNED_KINDS = ("power",)
+#: temperatures may exceed ``max_temperature`` by at most this much [K] in a converged plan
+TEMPERATURE_SLACK = 1e-3
+#: weight of the least-heating term that picks one plan where several reach the target equally
+REGULARISATION = 1e-6
+OBJECTIVES = ("time", "energy", "track")
+#: the least-energy plan keeps the tip within this fraction of the tolerance (the optimum lies on
+#: the boundary: a margin keeps it inside, whatever roundoff)
+MARGIN = 0.98
+
+
+@dataclass
+class PlanResult:
+    """A plan: the node times ``t`` (N + 1,) [s], the varied ``inputs`` (N, k) [W] (``paths``
+    their scenario paths), the heated TCAs' ``temperatures`` (N + 1, n) [degC] (``keys``), the
+    tip ``tips`` (N + 1, 3) [m] and its distance ``errors`` (N + 1,) [m] from ``targets`` (N + 1,
+    3) [m]: the target at every node, or the tracked path there."""
+    objective: str
+    t: np.ndarray
+    paths: list
+    inputs: np.ndarray
+    keys: list
+    temperatures: np.ndarray
+    max_temperatures: np.ndarray
+    tips: np.ndarray
+    errors: np.ndarray
+    targets: np.ndarray
+    tolerance: float
+    result: SolveStatus
+    energy_J: float
+    reached_at_s: float = None
+    by_s: float = None
+    message: str = ""
+    bounds: np.ndarray = None
+    fixed_powers: dict = field(default_factory=dict)
+
+    @property
+    def target(self):
+        """(3,) [m]: the target (the path's end when tracking)."""
+        return self.targets[-1]
+
+    @property
+    def converged(self):
+        return self.result.success
+
+    @property
+    def reached(self):
+        return self.reached_at_s is not None
+
+    def timeline(self):
+        """The schedule as ``simulate`` takes it: ``{duration, timeline: [{at, set}, ...]}`` (one
+        event per node where an input changes, values in W)."""
+        events, last = [], None
+        for k, values in enumerate(self.inputs):
+            current = [f"{v:.10g} W" for v in values]          # the same to 1e-10: one event
+            if current != last:
+                events.append({"at": f"{self.t[k]:.12g} s", "set": dict(zip(self.paths, current))})
+                last = current
+        return {"duration": f"{self.t[-1]:.12g} s", "timeline": events}
+
+    def overrides(self):
+        """``--set`` style overrides that replay the plan in ``simulate``."""
+        import json
+        schedule = self.timeline()
+        return [f"duration={schedule['duration']}", f"timeline={json.dumps(schedule['timeline'])}"]
+
+    def summary(self):
+        state = "REACHED" if self.reached else "NOT REACHED"
+        how = (f"{self.result.algorithm}, {self.result.nit} evaluations of the {len(self.t)} nodes, "
+               f"{self.result.solve_time_s:.3g} s")
+        lines = [f"plan ({self.objective}): {state}, " + (f"converged ({how})" if self.converged else
+                                                          f"NOT CONVERGED ({how}): {self.result.message}"),
+                 (f"  path of {len(self.targets)} nodes, RMS distance {self.rms_error * 1e3:.4g} mm, to "
+                  if self.objective == "track" else "  target ")
+                 + "[mm]: " + " ".join(f"{v * 1e3:+.4f}" for v in self.target)
+                 + f", tolerance {self.tolerance * 1e3:.4g} mm",
+                 (f"  within the tolerance of the path from {self.reached_at_s:.4g} s to {self.t[-1]:.4g} s"
+                  if self.objective == "track" else
+                  f"  reached at {self.reached_at_s:.4g} s and held to {self.t[-1]:.4g} s") if self.reached else
+                 f"  not within the tolerance by {self.t[-1]:.4g} s: the closest is {np.min(self.errors) * 1e3:.4g} mm "
+                 f"at {self.t[int(np.argmin(self.errors))]:.4g} s",
+                 f"  electrical energy {self.energy_J:.4g} J over {self.t[-1]:.4g} s ({len(self.t) - 1} steps of "
+                 f"{self.t[1] - self.t[0]:.4g} s)"]
+        for j, path in enumerate(self.paths):
+            lines.append(f"  {path:<28} {np.min(self.inputs[:, j]):.4g} to {np.max(self.inputs[:, j]):.4g} W")
+        for j, key in enumerate(self.keys):
+            lines.append(f"  {key + '.temperature':<28} peak {np.max(self.temperatures[:, j]):.2f} degC "
+                         f"(max {self.max_temperatures[j]:g})")
+        if self.message:
+            lines.append(f"  {self.message}")
+        return "\n".join(lines)
+
+    @property
+    def rms_error(self):
+        """Root mean square of ``errors`` [m] over the nodes after t = 0."""
+        return float(np.sqrt(np.mean(self.errors[1:] ** 2)))
+
+    def header(self):
+        return (["t [s]"] + [f"{p} [W]" for p in self.paths] + [f"{k}.temperature [degC]" for k in self.keys]
+                + ["tip_x [m]", "tip_y [m]", "tip_z [m]", "target_x [m]", "target_y [m]", "target_z [m]",
+                   "tip_error [m]"])
+
+    def rows(self):
+        """One row per node; an input is the value held from that node on (the last is held to the
+        end)."""
+        out = []
+        for k, t in enumerate(self.t):
+            held = self.inputs[min(k, len(self.inputs) - 1)]
+            out.append([f"{t:.12g}"] + [f"{v:.10g}" for v in held] + [f"{v:.10g}" for v in self.temperatures[k]]
+                       + [f"{v:.10g}" for v in self.tips[k]] + [f"{v:.10g}" for v in self.targets[k]]
+                       + [f"{self.errors[k]:.10g}"])
+        return out
+
+    def to_dict(self):
+        return {"converged": self.converged, "objective": self.objective, "reached": self.reached,
+                "reached_at_s": self.reached_at_s, "by_s": self.by_s, "energy_J": self.energy_J,
+                "target_m": self.target.tolist(), "rms_error_m": self.rms_error, "tolerance_m": self.tolerance, "horizon_s": float(self.t[-1]),
+                "nodes": len(self.t) - 1, "step_s": float(self.t[1] - self.t[0]), "inputs": self.paths,
+                "bounds_W": None if self.bounds is None else self.bounds.tolist(),
+                "fixed_powers_W": self.fixed_powers,
+                "peak_temperatures_degC": dict(zip(self.keys, np.max(self.temperatures, axis=0).tolist())),
+                "max_temperatures_degC": dict(zip(self.keys, self.max_temperatures.tolist())),
+                "final_error_m": float(self.errors[-1]), "status": self.result.as_dict(), "message": self.message,
+                "timeline": self.timeline()}
+
+    def save(self, directory, plot=True):
+        """Write ``plan.csv``, ``plan.json``, ``plan_timeline.yaml`` and (``plot``) ``plan.png``
+        into ``directory``; the paths written."""
+        from pathlib import Path
+
+        import yaml
+
+        from ..output import write_csv, write_json, write_text
+        directory = Path(directory)
+        directory.mkdir(parents=True, exist_ok=True)
+        written = [write_csv(directory / "plan.csv", self.header(), self.rows()),
+                   write_json(directory / "plan.json", self.to_dict()),
+                   write_text(directory / "plan_timeline.yaml",
+                              "# the plan's schedule: tca-casadi simulate SCENARIO --timeline plan_timeline.yaml\n"
+                              + yaml.safe_dump(self.timeline(), sort_keys=False))]
+        if plot:
+            from ..plotting.plan_plots import save_plan_png
+            written.append(save_plan_png(self, directory / "plan.png"))
+        return written
+
+
+class Plan:
+    """An optimal heating schedule for ``sim``'s robot (module docstring).
+
+    Parameters
+    ----------
+    sim : Simulation
+        Its heated TCAs' drives (``power``) and the rest of its parameters; its timeline is not
+        used (the plan is the timeline).
+    target : array_like (3,), or a path ``(times (m,) [s], positions (m, 3) [m])``
+        Target tip position [m] (global); for ``track``, the path (linear between its times,
+        held before the first and after the last).
+    objective : {"time", "energy", "track"}
+    horizon : float
+        [s] from t = 0.
+    nodes : int
+        Time steps N on the horizon.
+    vary : list of str, optional
+        ``MODULE.TCA.drive.value`` paths of the inputs (default every heated TCA's).
+    bounds : (float, float), optional
+        [W] for every input (default 0 to the power that holds the TCA at its type's
+        ``max_temperature``).
+    tolerance : float
+        Tip distance [m] within which the target counts as reached.
+    by : float, optional
+        ``energy``: the time [s] from which the tip must stay within the tolerance (default the
+        horizon's end).
+    """
+
+    def __init__(self, sim, target, objective="time", horizon=10.0, nodes=60, vary=None, bounds=None,
+                 tolerance=1e-4, by=None):
+        from ..studies.timeline import TimeSimulation
+        if objective not in OBJECTIVES:
+            raise ScenarioError(f"--objective {objective!r}: one of {', '.join(OBJECTIVES)}")
+        if not horizon > 0 or not np.isfinite(horizon):
+            raise ScenarioError(f"--horizon must be positive (got {horizon:g} s)")
+        if int(nodes) < 1:
+            raise ScenarioError(f"--nodes must be at least 1 (got {nodes})")
+        if not tolerance > 0:
+            raise ScenarioError(f"--tolerance must be positive (got {tolerance:g} m)")
+        self.sim, self.objective, self.horizon, self.nodes = sim, objective, float(horizon), int(nodes)
+        self.tolerance = float(tolerance)
+        self.step = self.horizon / self.nodes
+        self.targets = self._targets(target)
+        self.by = self.horizon if by is None else float(by)
+        if objective == "energy" and not 0 <= self.by <= self.horizon:
+            raise ScenarioError(f"--by {self.by:g} s is outside the horizon (0 to {self.horizon:g} s)")
+        last = max((e.at + (e.ramp or 0.0) for e in sim.scenario.timeline), default=0.0)
+        timed = TimeSimulation(sim, duration=max(self.horizon, last), dt=self.step)
+        self.heated, self.laws, self.coupling = timed.heated, timed.laws, timed.coupling
+        if not self.heated:
+            raise ScenarioError("plan: no TCA is heated electrically; give the TCAs to plan a drive "
+                                "(e.g. drive: {kind: power, value: 0})")
+        kinds = {a.key: TimeSimulation._drive(sim.scenario, a).kind for a in self.heated}
+        other = {key: kind for key, kind in kinds.items() if kind not in PLANNED_KINDS}
+        if other:
+            raise ScenarioError("plan: only power drives are planned (yet); " + ", ".join(
+                f"{key} has a {kind} drive" for key, kind in other.items()))
+        self.keys = [a.key for a in self.heated]
+        self.paths = self._varied(vary)
+        self.ambient = float(sim.scenario.ambient_temperature)
+        drives = timed.drives()
+        self.powers0 = np.array([d.schedule(0.0, left=True) for d in drives], float)
+        self.T0 = steady_state(self.laws, drives, self.ambient, self.coupling)[:, 0]
+        self.max_temperatures = np.array([a.law.max_temperature for a in self.heated], float)
+        self.bounds = self._bounds(bounds)
+        self._thermal_matrices()
+        self.temperature_index = [sim.robot.layout[a.parameter].start for a in self.heated]
+        self._equilibria = None
+
+    # ------------------------------------------------------------------ set-up
+    def _targets(self, target):
+        """(N + 1, 3) [m]: the target at every node (a path interpolated at the node times)."""
+        times = np.arange(self.nodes + 1) * self.step
+        if self.objective != "track":
+            return np.tile(np.asarray(target, float).reshape(3), (self.nodes + 1, 1))
+        path_times, positions = (np.asarray(part, float) for part in target)
+        if path_times.ndim != 1 or positions.shape != (path_times.size, 3) or path_times.size < 1:
+            raise ScenarioError("plan --path: give times (m,) and positions (m, 3)")
+        if np.any(np.diff(path_times) <= 0):
+            raise ScenarioError("plan --path: the times must increase from row to row")
+        return np.column_stack([np.interp(times, path_times, positions[:, j]) for j in range(3)])
+
+    def _varied(self, vary):
+        from ..scenario.sources import did_you_mean
+        known = {f"{key}.drive.value": key for key in self.keys}
+        if not vary:
+            return list(known)
+        for path in vary:
+            if path not in known:
+                raise ScenarioError(f"--vary {path!r} is not a heated TCA's drive value"
+                                    + did_you_mean(path, list(known)))
+        return list(dict.fromkeys(vary))
+
+    def _bounds(self, bounds):
+        """(k, 2) [W]: given, or 0 to each varied TCA's holding power at ``max_temperature``."""
+        rows = []
+        for path in self.paths:
+            j = self.keys.index(path.rsplit(".drive.value", 1)[0])
+            hold = self.laws[j].conductance * (self.max_temperatures[j] - self.ambient)
+            rows.append((0.0, hold) if bounds is None else tuple(float(b) for b in bounds))
+        rows = np.array(rows, float)
+        if np.any(rows[:, 0] < 0) or np.any(rows[:, 1] <= rows[:, 0]):
+            raise ScenarioError(f"--bounds {rows[0, 0]:g} {rows[0, 1]:g} W: give 0 <= LO < HI (a power drive's "
+                                "value cannot be negative)")
+        return rows
+
+    def _thermal_matrices(self):
+        """``T_k = T_free[k] + M[k] u`` for k = 0..N (u: the inputs, node-major, (N k,))."""
+        n, k, N = len(self.keys), len(self.paths), self.nodes
+        Phi, Gamma, offset = zero_order_hold(self.laws, self.ambient, self.step, self.coupling)
+        E = np.zeros((n, k))
+        for i, path in enumerate(self.paths):
+            E[self.keys.index(path.rsplit(".drive.value", 1)[0]), i] = 1.0
+        fixed = self.powers0 * (1.0 - E.sum(axis=1))            # the inputs not varied keep their value
+        self.fixed_powers = {key: float(p) for key, p in zip(self.keys, fixed) if E[self.keys.index(key)].sum() == 0}
+        self.T_free = np.zeros((N + 1, n))
+        self.M = np.zeros((N + 1, n, N * k))
+        self.T_free[0] = self.T0
+        for step in range(N):
+            self.T_free[step + 1] = Phi @ self.T_free[step] + Gamma @ fixed + offset
+            self.M[step + 1] = Phi @ self.M[step]
+            self.M[step + 1][:, step * k:(step + 1) * k] += Gamma @ E
+        self._fixed_energy = float(np.sum(fixed)) * self.horizon
+
+    def temperatures(self, u):
+        """(N + 1, n) [degC] at the inputs ``u`` ((N k,) W)."""
+        return self.T_free + self.M @ np.asarray(u, float)
+
+    # ------------------------------------------------------------------ equilibria
+    def _start(self):
+        """The equilibrium at t = 0 (the scenario's parameters at the initial temperatures)."""
+        sim = self.sim
+        params = sim.params.copy()
+        params[self.temperature_index] = self.T0
+        first = sim.solve_at(params)
+        if not first.converged:
+            raise ScenarioError(f"plan: no equilibrium at t = 0: {first.message}")
+        solver = sim.solver()
+        return solver, [first.raw["w"]] * (self.nodes + 1), [None] * (self.nodes + 1)
+
+    def nodes_at(self, u, derivatives=False):
+        """``(tips (N + 1, 3) [m], dtips (N + 1, 3, N k) or None)`` at the inputs ``u``: every
+        node's equilibrium (warm Newton from the last evaluation's, continuation where that
+        fails)."""
+        if self._equilibria is None:
+            self._equilibria = self._start()
+        solver, ws, lus = self._equilibria
+        T = self.temperatures(u)
+        tips = np.zeros((self.nodes + 1, 3))
+        dtips = np.zeros((self.nodes + 1, 3, self.M.shape[2])) if derivatives else None
+        selector = np.zeros((self.sim.params.size, len(self.keys)))
+        selector[self.temperature_index, np.arange(len(self.keys))] = 1.0
+        tolerance = self.sim.scenario.solver.tolerance
+        for k in range(self.nodes + 1):
+            params = self.sim.params.copy()
+            params[self.temperature_index] = T[k]
+            w, status = solver.square.newton(ws[k], params, tolerance, lu=lus[k])
+            if not status.success:
+                solution = self.sim.solve_at(params)
+                if not solution.converged:
+                    raise _NoEquilibrium(k, self.step * k, solution.message)
+                w = solution.raw["w"]
+            ws[k], lus[k] = w, solver.square.last_lu
+            tips[k] = solver._outputs_at(w, params)[1][0:3, self.sim.robot.tip_index]
+            if derivatives:
+                linear = solver.linearise(w, params)
+                lus[k] = linear.lu
+                dtips[k] = linear.tip_derivative(selector) @ self.M[k]
+        return tips, dtips
+
+    # ------------------------------------------------------------------ objectives
+    def solve(self, progress=None):
+        """The plan (:class:`PlanResult`); ``progress(fraction, text)`` after each phase."""
+        started = time.perf_counter()
+        try:
+            u, status, evaluations = self._fastest()
+            if self.objective == "energy":
+                if progress:
+                    progress(0.5, "least energy")
+                u, status, more = self._least_energy(u)
+                evaluations += more
+        except _NoEquilibrium as exc:
+            u = getattr(self, "_last_u", np.zeros(self.M.shape[2]))
+            status = SolveStatus(Status.NO_EQUILIBRIUM, "plan", detail=str(exc))
+            evaluations = 0
+        return self._result(u, status, evaluations, time.perf_counter() - started)
+
+    def initial_inputs(self):
+        """(N k,) [W]: the holding powers ``G (T* - T_amb)`` of the temperatures ``T*`` that
+        inverse statics finds for the target (its nearest pose if unreachable), at every node."""
+        from ..studies.inverse import InverseStatics
+        from ..studies.targets import Target
+        varied = [self.keys.index(path.rsplit(".drive.value", 1)[0]) for path in self.paths]
+        conductance = np.array([self.laws[j].conductance for j in varied])
+        low = float(np.max(self.ambient + self.bounds[:, 0] / conductance))
+        high = float(np.min(self.ambient + self.bounds[:, 1] / conductance))
+        inverse = InverseStatics(self.sim, vary=[f"{self.keys[j]}.temperature" for j in varied],
+                                 bounds=(low, max(high, low + 1e-3)), tolerance=self.tolerance)
+        answer = inverse.solve(Target.create(self.targets[-1]))
+        hold = np.array([answer.temperatures[f"{self.keys[j]}.temperature"] for j in varied])
+        powers = np.clip(conductance * (hold - self.ambient), self.bounds[:, 0], self.bounds[:, 1])
+        return np.tile(powers, self.nodes)
+
+    def _scaled(self):
+        lo = np.tile(self.bounds[:, 0], self.nodes)
+        hi = np.tile(self.bounds[:, 1], self.nodes)
+        return lo, hi
+
+    def _fastest(self):
+        """Least squares of the tip error at every node (the ``time`` objective)."""
+        from scipy.optimize import least_squares
+        lo, hi = self._scaled()
+        span = hi - lo
+        weight = np.sqrt(REGULARISATION)
+        T_max = np.tile(self.max_temperatures, self.nodes + 1)
+        cache = {}
+
+        def evaluate(x, derivatives=False):
+            """``(u, tips, dtips)`` at x; the derivatives only when asked (trial points that
+            least squares rejects need none)."""
+            key = x.tobytes()
+            if key not in cache or (derivatives and cache[key][2] is None):
+                cache.clear()
+                u = lo + span * x
+                self._last_u = u
+                cache[key] = (u, *self.nodes_at(u, derivatives=derivatives))
+            return cache[key]
+
+        def residuals(x):
+            u, tips, _ = evaluate(x)
+            over = np.maximum(self.temperatures(u).ravel() - T_max, 0.0) / TEMPERATURE_SLACK
+            return np.concatenate([((tips - self.targets) / self.tolerance).ravel(), weight * x, over])
+
+        def jacobian(x):
+            u, _, dtips = evaluate(x, derivatives=True)
+            hot = (self.temperatures(u).ravel() - T_max > 0)[:, None]
+            dT = self.M.reshape(-1, self.M.shape[2]) * span / TEMPERATURE_SLACK
+            return np.vstack([dtips.reshape(-1, dtips.shape[2]) * span / self.tolerance,
+                              weight * np.eye(x.size), np.where(hot, dT, 0.0)])
+
+        x0 = (self.initial_inputs() - lo) / span
+        found = least_squares(residuals, x0, jac=jacobian, bounds=(0.0, 1.0), method="trf", xtol=1e-10,
+                              ftol=1e-12, gtol=1e-10, max_nfev=200)
+        u = lo + span * found.x
+        failure = None if found.status > 0 else Status.MAX_ITERATIONS if found.status == 0 else Status.ALGORITHM_FAILED
+        over = float(np.max(self.temperatures(u) - self.max_temperatures))
+        residual = max(over, 0.0) / TEMPERATURE_SLACK
+        status = SolveStatus.judged("least squares (trf)", residual, 1.0, failure, nit=int(found.nfev),
+                                    detail=f"least squares: {found.message}")
+        return u, status, int(found.nfev)
+
+    def _least_energy(self, u0):
+        """The least electrical energy with the tip within the tolerance from ``by`` on (SLSQP)."""
+        from scipy.optimize import minimize
+        lo, hi = self._scaled()
+        span = hi - lo
+        late = np.flatnonzero(np.arange(self.nodes + 1) * self.step >= self.by - 1e-9 * self.step)
+        T_max = self.max_temperatures
+        M = self.M.reshape(-1, self.M.shape[2])
+        cache, count = {}, [0]
+
+        def evaluate(x):
+            key = x.tobytes()
+            if key not in cache:
+                cache.clear()
+                count[0] += 1
+                u = lo + span * x
+                self._last_u = u
+                cache[key] = self.nodes_at(u, derivatives=True)
+            return cache[key]
+
+        def reach(x):                      # >= 0: each coordinate within the tolerance box from ``by`` on
+            tips, _ = evaluate(x)
+            error = (tips[late] - self.targets[late]).ravel() / (MARGIN * self.tolerance / np.sqrt(3.0))
+            return np.concatenate([1.0 - error, 1.0 + error])
+
+        def reach_jacobian(x):
+            _, dtips = evaluate(x)
+            rate = dtips[late].reshape(-1, dtips.shape[2]) / (MARGIN * self.tolerance / np.sqrt(3.0)) * span
+            return np.vstack([-rate, rate])
+
+        cool = {"type": "ineq", "fun": lambda x: (np.tile(T_max, self.nodes + 1) - (self.T_free.ravel() + M @ (lo + span * x))),
+                "jac": lambda x: -M * span}
+        energy = self.step * span / np.sum(span)                       # scaled: the energy per full range
+        found = minimize(lambda x: float(energy @ x), (u0 - lo) / span, jac=lambda x: energy, method="SLSQP",
+                         bounds=[(0.0, 1.0)] * lo.size,
+                         constraints=[{"type": "ineq", "fun": reach, "jac": reach_jacobian}, cool],
+                         options={"maxiter": 200, "ftol": 1e-9})
+        x = np.clip(found.x, 0.0, 1.0)
+        u = lo + span * x
+        violation = max(float(-np.min(reach(x))), 0.0)
+        failure = None if found.success else Status.ALGORITHM_FAILED
+        status = SolveStatus.judged("SLSQP", violation, 1e-6, failure, nit=int(found.nit),
+                                    detail=f"SLSQP: {found.message}")
+        return u, status, count[0]
+
+    # ------------------------------------------------------------------ the result
+    def _result(self, u, status, evaluations, seconds):
+        tips, _ = self.nodes_at(u) if status.status != Status.NO_EQUILIBRIUM else (np.full((self.nodes + 1, 3), np.nan), None)
+        errors = np.linalg.norm(tips - self.targets, axis=1)
+        within = errors <= self.tolerance
+        reached = None
+        if within[-1]:
+            k = len(within) - 1
+            while k > 0 and within[k - 1]:
+                k -= 1
+            reached = float(k * self.step)
+        message = ""
+        if self.objective == "energy" and (reached is None or reached > self.by + 1e-9):
+            status = status.replace(status=Status.ABOVE_TOLERANCE) if status.success else status
+            message = (f"the target cannot be held from {self.by:g} s within these bounds"
+                       + (f" (the fastest plan holds it from {reached:g} s)" if reached is not None else ""))
+        elif reached is None and self.objective == "track" and status.status != Status.NO_EQUILIBRIUM:
+            message = (f"the tip is not within the tolerance of the path at the horizon's end ({errors[-1] * 1e3:.4g} mm "
+                       f"away; RMS distance {np.sqrt(np.mean(errors[1:] ** 2)) * 1e3:.4g} mm)")
+        elif reached is None and status.status != Status.NO_EQUILIBRIUM:
+            message = (f"the target is not reached within the horizon: the closest pose is "
+                       f"{np.min(errors) * 1e3:.4g} mm away (raise --horizon or the --bounds, or move the target)")
+        u = np.asarray(u, float).reshape(self.nodes, len(self.paths))
+        energy = float(np.sum(u) * self.step) + self._fixed_energy
+        status = status.replace(solve_time_s=seconds, nit=evaluations)
+        t = np.arange(self.nodes + 1) * self.step
+        return PlanResult(self.objective, t, list(self.paths), u, list(self.keys), self.temperatures(u.ravel()),
+                          self.max_temperatures, tips, errors, self.targets, self.tolerance, status, energy, reached,
+                          self.by if self.objective == "energy" else None, message, self.bounds, self.fixed_powers)
+
+
+def read_path(path):
+    """``(times (m,) [s], positions (m, 3) [m])`` of a CSV with columns ``t``, ``x``, ``y``,
+    ``z`` (units in the header: ``t [s]``, ``x [mm]``; none: SI), times increasing. Read by
+    :func:`tca_casadi.tables.read_table` (one-line errors for any bad file)."""
+    from ..tables import name_of, read_table
+    table = read_table(path, "plan --path", "tip path", required=("t", "x", "y", "z"))
+    columns = {name_of(name).lower(): k for k, name in enumerate(table.header)}
+    times = np.array([table.quantity(k, columns["t"], "time") for k in range(len(table.rows))])
+    positions = np.array([[table.quantity(k, columns[c], "length") for c in "xyz"] for k in range(len(table.rows))])
+    if not len(times):
+        raise ScenarioError(f"plan --path: {path}: no rows (a header t, x, y, z, then one row per point)")
+    later = np.flatnonzero(np.diff(times) <= 0)
+    if later.size:
+        raise ScenarioError(f"{table.where(int(later[0]) + 1)}: the times must increase from row to row")
+    return times, positions
+
+
+class _NoEquilibrium(Exception):
+    def __init__(self, node, t, message):
+        super().__init__(f"no equilibrium at node {node} (t = {t:g} s): {message}")

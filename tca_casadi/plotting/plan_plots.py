@@ -1,0 +1,43 @@
+"""``plan.png`` of ``plan``: the planned inputs, the temperatures against their limits and the
+tip's distance from the target against time."""
+import numpy as np
+
+from ..output import save_figure
+from .robot3d import _pyplot
+from .sweep_plots import line_style
+
+
+def save_plan_png(plan, path):
+    """Three panels against time [s]: each input [mW] (held over its step), each heated TCA's
+    temperature [degC] with its type's maximum dashed, the tip's distance from the target [mm]
+    with the tolerance dashed and the time it is reached marked. Saves a PNG; returns ``path``."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(3, 1, figsize=(9, 7.5), sharex=True)
+    t, n = plan.t, len(plan.t)
+    held = np.vstack([plan.inputs, plan.inputs[-1:]])
+    for j, path_name in enumerate(plan.paths):
+        axes[0].plot(t, held[:, j] * 1e3, drawstyle="steps-post", label=path_name, **line_style(j, n))
+    for j, key in enumerate(plan.keys):
+        line = axes[1].plot(t, plan.temperatures[:, j], label=key, **line_style(j, n))[0]
+        axes[1].axhline(plan.max_temperatures[j], color=line.get_color(), linestyle="--", linewidth=0.8)
+    axes[2].plot(t, plan.errors * 1e3, color="black", label="|tip - target|", **line_style(0, n))
+    axes[2].axhline(plan.tolerance * 1e3, color="tab:green", linestyle="--", linewidth=1, label="tolerance")
+    if plan.reached:
+        for ax in axes:
+            ax.axvline(plan.reached_at_s, color="tab:green", linestyle=":", linewidth=1)
+        axes[2].annotate(f"reached at {plan.reached_at_s:.3g} s", (plan.reached_at_s, plan.tolerance * 1e3),
+                         textcoords="offset points", xytext=(6, 8), fontsize=8, color="tab:green")
+    if np.all(plan.errors > 0):
+        axes[2].set_yscale("log")
+    labels = ["input power [mW]", "temperature [degC]\n(dashed: max)", "distance to target [mm]"]
+    for ax, label in zip(axes, labels):
+        ax.set_ylabel(label)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    axes[-1].set_xlabel("time [s]")
+    state = "reached" if plan.reached else "not reached"
+    axes[0].set_title(f"plan ({plan.objective}): {state}, energy {plan.energy_J:.3g} J", fontsize=10)
+    fig.tight_layout()
+    save_figure(fig, path, dpi=110)
+    plt.close(fig)
+    return path

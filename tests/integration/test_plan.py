@@ -1,0 +1,168 @@
+"""Optimal heating schedules (``tca-casadi plan``, issue 32): the minimum-time plan of one heated
+TCA against its closed form, the plan replayed through ``simulate``, the least-energy plan
+against the fastest and against a constant input, bad input."""
+import json
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from conftest import SCENARIOS
+from tca_casadi import Simulation
+from tca_casadi.cli import main
+from tca_casadi.control import Plan
+from tca_casadi.studies.timeline import TimeSimulation
+
+HEATING = SCENARIOS / "bending_module_heating.yaml"
+#: TCA 2 at 60 degC in steady state puts the tip here
+TARGET_TEMPERATURE = 60.0
+
+
+@pytest.fixture(scope="module")
+def target():
+    return Simulation.from_file(HEATING, [f"bending.tca2.temperature={TARGET_TEMPERATURE}"]).solve(warn=False).tip_position
+
+
+@pytest.fixture(scope="module")
+def fastest(target):
+    return Plan(Simulation.from_file(HEATING), target, objective="time", horizon=24.0, nodes=12).solve()
+
+
+def test_minimum_time_is_bang_bang_and_follows_the_closed_form(fastest):
+    """One heated TCA, power bounded by P_max (the default: the power that holds 150 degC): full
+    power until the temperature that puts the tip on target, T* = 60 degC, then the holding power
+    G (T* - T_amb). Reached at t* = (C/G) ln((P_max/G) / (P_max/G - (T* - T_amb))) (6.37 s) to
+    the grid's resolution (2 s steps); the temperatures on the way follow the heating curve
+    T_amb + (P_max/G)(1 - exp(-t G/C)) to 1e-9 K."""
+    plan = fastest
+    assert plan.converged and plan.reached, plan.summary()
+    law = Plan(Simulation.from_file(HEATING), plan.target, horizon=24.0, nodes=12).laws[0]
+    C, G, ambient = law.heat_capacity, law.conductance, 25.0
+    p_max = plan.bounds[0, 1]
+    assert p_max == pytest.approx(G * (150.0 - ambient), rel=1e-12)
+    rise = TARGET_TEMPERATURE - ambient
+    t_star = (C / G) * np.log((p_max / G) / (p_max / G - rise))
+    h = plan.t[1]
+    assert t_star <= plan.reached_at_s <= t_star + h
+    full = plan.t[:-1] + h <= t_star                       # steps that end before t*
+    hold = plan.t[:-1] >= plan.reached_at_s
+    assert_allclose(plan.inputs[full, 0], p_max, rtol=1e-6, atol=0)
+    assert_allclose(plan.inputs[hold, 0], G * rise, rtol=1e-6, atol=0)
+    on_the_way = plan.t <= t_star
+    curve = ambient + (p_max / G) * (1 - np.exp(-plan.t[on_the_way] * G / C))
+    assert_allclose(plan.temperatures[on_the_way, 0], curve, rtol=0, atol=1e-9)
+    assert np.all(plan.errors[plan.t >= plan.reached_at_s] <= plan.tolerance)
+
+
+def test_the_plan_replayed_in_simulate_gives_the_planned_temperatures_and_tips(fastest):
+    """The schedule (``PlanResult.overrides``, what ``plan_timeline.yaml`` holds) run through the
+    quasi-static ``simulate`` at the plan's step: the same temperatures to 1e-6 K and the same tip
+    to 1e-6 m at every node (measured 1e-8 K and 1e-11 m: the thermal integrator's tolerance)."""
+    series = TimeSimulation(Simulation.from_file(HEATING, fastest.overrides()), dt=fastest.t[1]).run()
+    assert series.completed, series.message
+    assert_allclose(series.t, fastest.t, rtol=0, atol=1e-12)
+    column = series.keys.index("bending.tca2")
+    assert_allclose(series.temperatures[:, column], fastest.temperatures[:, 0], rtol=0, atol=1e-6)
+    assert_allclose(series.tip_positions(), fastest.tips, rtol=0, atol=1e-6)
+
+
+def test_least_energy_uses_less_than_the_fastest_plan_and_a_constant_input(target, fastest):
+    """Held from 16 s on: less electrical energy than the minimum-time plan over the horizon, and
+    up to 16 s less than the constant input that brings the TCA to the same temperature at 16 s,
+    G (T(16 s) - T_amb) / (1 - exp(-16 s G/C)) (heating late loses less to the air)."""
+    planner = Plan(Simulation.from_file(HEATING), target, objective="energy", horizon=24.0, nodes=12, by=16.0)
+    plan = planner.solve()
+    assert plan.converged and plan.reached and plan.reached_at_s <= 16.0, plan.summary()
+    assert np.all(plan.errors[plan.t >= 16.0] <= plan.tolerance)
+    assert plan.energy_J < fastest.energy_J
+    law, h = planner.laws[0], plan.t[1]
+    before = plan.t[:-1] < 16.0
+    used = float(np.sum(plan.inputs[before, 0]) * h)
+    reached = plan.temperatures[plan.t == 16.0, 0][0]
+    constant = law.conductance * (reached - 25.0) / (1 - np.exp(-16.0 * law.conductance / law.heat_capacity))
+    assert used < constant * 16.0
+    assert np.max(plan.temperatures) <= 150.0
+
+
+def test_cli_plan_writes_its_files_and_simulate_replays_its_timeline(tmp_path, target, capsys):
+    position = [f"{v * 1e3:.9f} mm" for v in target]
+    assert main(["plan", str(HEATING), "--target-position", *position, "--horizon", "24 s", "--nodes", "12",
+                 "-o", str(tmp_path / "plan"), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "plan (time): REACHED" in out
+    report = json.loads((tmp_path / "plan" / "plan.json").read_text())
+    assert report["converged"] and report["reached_at_s"] == 8.0 and report["nodes"] == 12
+    data = np.genfromtxt(tmp_path / "plan" / "plan.csv", delimiter=",", names=True)
+    assert data.dtype.names[:3] == ("t_s", "bendingtca2drivevalue_W", "bendingtca2temperature_degC")
+    assert (tmp_path / "plan" / "plan.png").stat().st_size > 10_000
+    assert main(["simulate", str(HEATING), "--timeline", str(tmp_path / "plan" / "plan_timeline.yaml"), "--dt", "2",
+                 "-o", str(tmp_path / "replay"), "--quiet", "--no-animation", "--no-plot"]) == 0
+    replay = np.genfromtxt(tmp_path / "replay" / "timeseries.csv", delimiter=",", names=True)
+    assert_allclose(replay["tip_x_m"], data["tip_x_m"], rtol=0, atol=1e-6)
+    assert_allclose(replay["bendingtca2temperature_degC"], data["bendingtca2temperature_degC"], rtol=0, atol=1e-6)
+
+
+def test_an_unreachable_target_says_how_close_and_writes_its_files(tmp_path, capsys):
+    """A target 10 cm away: the plan gets as close as the bounds allow, says how close, exit 1."""
+    assert main(["plan", str(HEATING), "--target-position", "0.1", "0", "0", "--horizon", "10", "--nodes", "5",
+                 "-o", str(tmp_path), "--quiet", "--no-plot"]) == 1
+    out = capsys.readouterr().out
+    assert "NOT REACHED" in out and "the target is not reached within the horizon: the closest pose is" in out
+    assert not json.loads((tmp_path / "plan.json").read_text())["reached"]
+
+
+@pytest.mark.parametrize("arguments, message", [
+    (["--vary", "bending.tca2.drive.valu"], "--vary 'bending.tca2.drive.valu' is not a heated TCA's drive value "
+                                            "(did you mean 'bending.tca2.drive.value'?)"),
+    (["--bounds", "0.5", "0.1"], "--bounds 0.5 0.1 W: give 0 <= LO < HI"),
+    (["--objective", "energy", "--by", "40"], "--by 40 s is outside the horizon (0 to 30 s)"),
+    (["--horizon", "-1"], "--horizon must be positive"),
+])
+def test_bad_plan_input_is_one_line(arguments, message, tmp_path, capsys):
+    assert main(["plan", str(HEATING), "--target-position", "0", "0", "-0.04", *arguments,
+                 "-o", str(tmp_path), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and message in err, err
+
+
+def test_a_robot_without_heated_tcas_has_nothing_to_plan(tmp_path, capsys):
+    assert main(["plan", str(SCENARIOS / "bending_module.yaml"), "--target-position", "0", "0", "-0.04",
+                 "-o", str(tmp_path), "--quiet"]) == 2
+    assert "plan: no TCA is heated electrically" in capsys.readouterr().err
+
+
+def test_a_timeline_file_without_a_timeline_is_refused(tmp_path, capsys):
+    bad = tmp_path / "timeline.yaml"
+    bad.write_text("events: []\n")
+    assert main(["simulate", str(HEATING), "--timeline", str(bad), "-o", str(tmp_path / "out"), "--quiet"]) == 2
+    assert "expected a mapping with a 'timeline' list" in capsys.readouterr().err
+
+
+def test_tracking_a_plan_s_own_tips_recovers_its_inputs(fastest):
+    """A path that some schedule follows exactly (the fastest plan's tips at its nodes) is
+    tracked to roundoff, and with one heated TCA (tip and temperature one to one) the tracking
+    plan's powers are that schedule's (measured: 7e-12 m, 2e-8 relative, 3e-8 K)."""
+    plan = Plan(Simulation.from_file(HEATING), (fastest.t, fastest.tips), objective="track", horizon=24.0,
+                nodes=12).solve()
+    assert plan.converged and plan.reached and plan.reached_at_s == 0.0
+    assert np.max(plan.errors) < 1e-9
+    assert_allclose(plan.inputs, fastest.inputs, rtol=1e-6, atol=0)
+    assert_allclose(plan.temperatures, fastest.temperatures, rtol=0, atol=1e-5)
+
+
+def test_cli_track_reads_a_path_in_any_unit(tmp_path, fastest, capsys):
+    path = tmp_path / "path.csv"
+    rows = "\n".join(f"{t:.12g},{x * 1e3:.12g},{y * 1e3:.12g},{z * 1e3:.12g}" for t, (x, y, z) in zip(fastest.t, fastest.tips))
+    path.write_text("t [s],x [mm],y [mm],z [mm]\n" + rows + "\n")
+    assert main(["plan", str(HEATING), "--objective", "track", "--path", str(path), "--horizon", "24", "--nodes", "12",
+                 "-o", str(tmp_path / "out"), "--quiet", "--no-plot"]) == 0
+    assert "plan (track): REACHED" in capsys.readouterr().out
+    report = json.loads((tmp_path / "out" / "plan.json").read_text())
+    assert report["rms_error_m"] < 1e-9
+    path.write_text("t [s],x [mm],y [mm],z [mm]\n1,0,0,-40\n1,0,0,-41\n")
+    assert main(["plan", str(HEATING), "--objective", "track", "--path", str(path), "-o", str(tmp_path / "bad"),
+                 "--quiet"]) == 2
+    assert "line 3: the times must increase from row to row" in capsys.readouterr().err
+    assert main(["plan", str(HEATING), "--objective", "track", "--target-position", "0", "0", "-0.04",
+                 "-o", str(tmp_path / "bad"), "--quiet"]) == 2
+    assert "plan --objective track follows a --path CSV" in capsys.readouterr().err
