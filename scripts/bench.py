@@ -278,6 +278,44 @@ def print_till(runs):
               f"first mode {r['first_mode_hz']:.3f} Hz (Euler-Bernoulli {r['euler_bernoulli_hz']:.3f} Hz)")
 
 
+def control_rates(quick=False):
+    """Heating schedules and the closed loop (issue 32): the minimum-time plan of the bending
+    module (TCA 2 by power, to the pose 60 degC holds, 60 nodes on 30 s; quick: 10) and of the
+    arm (its bending module's TCAs by power, to the pose of TCA 2 at 60 degC; 60 nodes; skipped
+    when quick), each from a fresh build, wall time and evaluations; and the closed loop of
+    ``scenarios/bending_module_mpc.yaml`` (30 s; quick: 5 s) with its controller's solve times."""
+    from tca_casadi.control import ClosedLoop, Plan
+    out = {}
+    heating = SCENARIOS / "bending_module_heating.yaml"
+    cases = {"bending module": (heating, [], ["bending.tca2.temperature=60"])}
+    if not quick:
+        drives = [f"bending.tca{k}.drive={{kind: power, value: 0}}" for k in (1, 2, 3)]
+        cases["arm"] = (SCENARIOS / "arm.yaml", drives + [f"bending.tca{k}.temperature=25" for k in (1, 2, 3)],
+                        ["bending.tca2.temperature=60", "bending.tca1.temperature=25", "bending.tca3.temperature=25"])
+    for name, (source, overrides, at) in cases.items():
+        target = Simulation.from_file(source, overrides + at).solve(warn=False).tip_position
+        started = time.perf_counter()
+        plan = Plan(Simulation.from_file(source, overrides), target, horizon=30.0, nodes=10 if quick else 60).solve()
+        out[f"plan {name}"] = {"nodes": len(plan.t) - 1, "wall_s": time.perf_counter() - started,
+                               "evaluations": plan.result.nit, "reached_at_s": plan.reached_at_s,
+                               "converged": plan.converged}
+    loop = ClosedLoop(SCENARIOS / "bending_module_mpc.yaml", [f"duration={5 if quick else 30}"]).run()
+    report = loop.report()
+    out["mpc bending module"] = {key: report[key] for key in ("periods", "reached_at_s", "solve_time_median_s",
+                                                              "solve_time_max_s", "solve_time_fraction_of_period")}
+    return out
+
+
+def print_control(rates):
+    for name, r in rates.items():
+        if name.startswith("plan"):
+            print(f"{name}: {r['nodes']} nodes, {r['wall_s']:.2f} s ({r['evaluations']} evaluations), reached at "
+                  f"{r['reached_at_s']} s, {'converged' if r['converged'] else 'NOT CONVERGED'}")
+        else:
+            print(f"{name}: {r['periods']} periods of 1 s, controller solve median {r['solve_time_median_s'] * 1e3:.0f} ms, "
+                  f"max {r['solve_time_max_s'] * 1e3:.0f} ms ({r['solve_time_fraction_of_period']:.0%} of the period)")
+
+
 def study_rates(per_axis, design_per_length):
     """Samples per second of ``tca-casadi study`` on the bending module: the temperature box of
     its three TCAs (``per_axis``^3 grid samples, 25-125 degC) serially and on a pool of 2
@@ -473,6 +511,8 @@ def main(argv=None):
     parser.add_argument("-o", "--output", type=Path, default=ROOT / "results" / "bench.json")
     parser.add_argument("--muscles", action="store_true", help="only the other muscles' rows (results/bench_muscles.json)")
     parser.add_argument("--contact", action="store_true", help="only the contact rows (results/bench_contact.json)")
+    parser.add_argument("--control", action="store_true",
+                        help="only the heating-schedule and closed-loop rows (results/bench_control.json)")
     parser.add_argument("--dynamics", action="store_true",
                         help="only the dynamics rows: Till's steel cantilever and the BDF2 step rates "
                              "(results/bench_dynamics.json)")
@@ -484,6 +524,8 @@ def main(argv=None):
         return _only(args, "scaling", scaling(args.quick), print_scaling)
     if args.dynamics:
         return _dynamics_only(args)
+    if args.control:
+        return _only(args, "control", control_rates(args.quick), print_control)
     if args.muscles:
         return _muscles_only(args)
     if args.contact:

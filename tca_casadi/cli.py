@@ -128,6 +128,9 @@ def build_parser():
     simulate.add_argument("--timeline", type=Path, default=None, metavar="YAML",
                           help="a file with a timeline (and optionally a duration) that replaces the scenario's, "
                                "e.g. a plan's plan_timeline.yaml")
+    simulate.add_argument("--plant-set", dest="plant_overrides", action="append", default=[], metavar="PATH=VALUE",
+                          help="with an mpc drive: make the simulated plant differ from the controller's model, "
+                               "e.g. 'materials.ecoflex30.youngs_modulus=0.1375 MPa' (repeatable)")
     simulate.add_argument("--no-plot", action="store_true", help="no timeseries.png")
     simulate.add_argument("--no-animation", action="store_true",
                           help="no simulate.gif / simulate.mp4 (the robot in time, with a clock)")
@@ -528,6 +531,7 @@ def _simulate(args):
     from .simulation import Simulation
     from .studies.timeline import TimeSimulation
     from .units import to_si
+    from .control.mpc import mpc_drives
     overrides = list(args.overrides) + ([] if args.timeline is None else _timeline_overrides(args.timeline))
     sim = Simulation.from_file(Path(args.scenario), overrides, allow_code=args.allow_code)
     try:
@@ -535,6 +539,11 @@ def _simulate(args):
         dt = to_si(args.dt, "time")
     except ValueError as exc:
         raise ScenarioError(f"--duration/--dt: {exc}") from None
+    if mpc_drives(sim.scenario):
+        return _closed_loop(args, sim, overrides, duration)
+    if args.plant_overrides:
+        raise ScenarioError("--plant-set makes the plant of a closed loop differ from its model; this scenario has "
+                            "no mpc drive")
     timed = TimeSimulation(sim, duration=duration, dt=dt)
     plots = ["timeseries.png"]
     movies = ["simulate.gif", "simulate.mp4"]
@@ -557,6 +566,27 @@ def _simulate(args):
             print(f"animation at {'real time' if speed_up == 1 else f'{speed_up}x real time'}")
     print("wrote " + ", ".join(str(p) for p in run.final(written)))
     return 0 if series.completed else 1
+
+
+def _closed_loop(args, sim, overrides, duration):
+    """``simulate`` of a scenario with mpc drives: the closed loop (:class:`ClosedLoop`),
+    timeseries.csv (with the controller's solve time per period), simulation.json and
+    timeseries.png (inputs, temperatures, distance to the target)."""
+    from .control.mpc import ClosedLoop
+    from .plotting.plan_plots import save_plan_png
+    loop = ClosedLoop(Path(args.scenario), overrides, args.plant_overrides, duration=duration,
+                      allow_code=args.allow_code)
+    with _results(args, sim, "simulate", ["timeseries.csv", "simulation.json", "timeseries.png"],
+                  stale=(["timeseries.png"] if args.no_plot else []) + ["simulate.gif", "simulate.mp4"],
+                  default="simulate") as run:
+        result = _with_progress(loop.run, "closed loop", quiet=args.quiet)
+        written = [result.to_csv(run.staging / "timeseries.csv"),
+                   write_json(run.staging / "simulation.json", result.report())]
+        if not args.no_plot:
+            written.append(save_plan_png(result, run.staging / "timeseries.png"))
+    print(result.summary())
+    print("wrote " + ", ".join(str(p) for p in run.final(written)))
+    return 0 if result.completed and result.reached else 1
 
 
 def _timeline_overrides(path):

@@ -1,4 +1,5 @@
 """Control: optimal heating schedules from the model that ``simulate`` runs (``tca-casadi plan``)."""
+from .mpc import ClosedLoop, ClosedLoopResult
 from .plan import Plan, PlanResult
 
-__all__ = ["Plan", "PlanResult"]
+__all__ = ["ClosedLoop", "ClosedLoopResult", "Plan", "PlanResult"]

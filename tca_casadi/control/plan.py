@@ -48,11 +48,11 @@ MARGIN = 0.98
 
 
 @dataclass
-class PlanResult:
-    """A plan: the node times ``t`` (N + 1,) [s], the varied ``inputs`` (N, k) [W] (``paths``
-    their scenario paths), the heated TCAs' ``temperatures`` (N + 1, n) [degC] (``keys``), the
-    tip ``tips`` (N + 1, 3) [m] and its distance ``errors`` (N + 1,) [m] from ``targets`` (N + 1,
-    3) [m]: the target at every node, or the tracked path there."""
+class HeatingRecord:
+    """What a plan and a closed loop both hold: times ``t`` [s], the varied inputs ``inputs``
+    [W] (``paths``), the heated TCAs' ``temperatures`` [degC] (``keys``) and their
+    ``max_temperatures``, the tip ``tips`` [m] and its distance ``errors`` [m] from where it
+    should be (what :func:`~tca_casadi.plotting.plan_plots.save_plan_png` draws)."""
     objective: str
     t: np.ndarray
     paths: list
@@ -62,6 +62,14 @@ class PlanResult:
     max_temperatures: np.ndarray
     tips: np.ndarray
     errors: np.ndarray
+
+
+@dataclass
+class PlanResult(HeatingRecord):
+    """A plan: the node times ``t`` (N + 1,) [s], the varied ``inputs`` (N, k) [W] (``paths``
+    their scenario paths), the heated TCAs' ``temperatures`` (N + 1, n) [degC] (``keys``), the
+    tip ``tips`` (N + 1, 3) [m] and its distance ``errors`` (N + 1,) [m] from ``targets`` (N + 1,
+    3) [m]: the target at every node, or the tracked path there."""
     targets: np.ndarray
     tolerance: float
     result: SolveStatus
@@ -208,10 +216,13 @@ class Plan:
     by : float, optional
         ``energy``: the time [s] from which the tip must stay within the tolerance (default the
         horizon's end).
+    initial_temperatures : array_like, optional
+        The heated TCAs' temperatures [degC] at t = 0 (default the steady state of their drives;
+        a controller plans from measured ones, :meth:`restart`).
     """
 
     def __init__(self, sim, target, objective="time", horizon=10.0, nodes=60, vary=None, bounds=None,
-                 tolerance=1e-4, by=None):
+                 tolerance=1e-4, by=None, initial_temperatures=None):
         from ..studies.timeline import TimeSimulation
         if objective not in OBJECTIVES:
             raise ScenarioError(f"--objective {objective!r}: one of {', '.join(OBJECTIVES)}")
@@ -244,7 +255,8 @@ class Plan:
         self.ambient = float(sim.scenario.ambient_temperature)
         drives = timed.drives()
         self.powers0 = np.array([d.schedule(0.0, left=True) for d in drives], float)
-        self.T0 = steady_state(self.laws, drives, self.ambient, self.coupling)[:, 0]
+        self.T0 = (steady_state(self.laws, drives, self.ambient, self.coupling)[:, 0] if initial_temperatures is None
+                   else np.asarray(initial_temperatures, float).reshape(len(self.heated)))
         self.max_temperatures = np.array([a.law.max_temperature for a in self.heated], float)
         self.bounds = self._bounds(bounds)
         self._thermal_matrices()
@@ -306,6 +318,14 @@ class Plan:
             self.M[step + 1][:, step * k:(step + 1) * k] += Gamma @ E
         self._fixed_energy = float(np.sum(fixed)) * self.horizon
 
+    def restart(self, initial_temperatures, target=None):
+        """Plan again from ``initial_temperatures`` [degC] (and a new ``target``), keeping the
+        built matrices and every node's last equilibrium as Newton's starts."""
+        self.T0 = np.asarray(initial_temperatures, float).reshape(len(self.heated))
+        if target is not None:
+            self.targets = self._targets(target)
+        self._thermal_matrices()
+
     def temperatures(self, u):
         """(N + 1, n) [degC] at the inputs ``u`` ((N k,) W)."""
         return self.T_free + self.M @ np.asarray(u, float)
@@ -353,11 +373,13 @@ class Plan:
         return tips, dtips
 
     # ------------------------------------------------------------------ objectives
-    def solve(self, progress=None):
-        """The plan (:class:`PlanResult`); ``progress(fraction, text)`` after each phase."""
+    def solve(self, progress=None, start=None):
+        """The plan (:class:`PlanResult`); ``progress(fraction, text)`` after each phase;
+        ``start``: the inputs (N k,) [W] to start from (default the holding powers of the
+        inverse-statics answer, :meth:`initial_inputs`)."""
         started = time.perf_counter()
         try:
-            u, status, evaluations = self._fastest()
+            u, status, evaluations = self._fastest(start)
             if self.objective == "energy":
                 if progress:
                     progress(0.5, "least energy")
@@ -390,8 +412,9 @@ class Plan:
         hi = np.tile(self.bounds[:, 1], self.nodes)
         return lo, hi
 
-    def _fastest(self):
-        """Least squares of the tip error at every node (the ``time`` objective)."""
+    def _fastest(self, start=None):
+        """Least squares of the tip error at every node (the ``time`` and ``track`` objectives),
+        from the inputs ``start`` (default :meth:`initial_inputs`)."""
         from scipy.optimize import least_squares
         lo, hi = self._scaled()
         span = hi - lo
@@ -422,7 +445,7 @@ class Plan:
             return np.vstack([dtips.reshape(-1, dtips.shape[2]) * span / self.tolerance,
                               weight * np.eye(x.size), np.where(hot, dT, 0.0)])
 
-        x0 = (self.initial_inputs() - lo) / span
+        x0 = np.clip(((self.initial_inputs() if start is None else np.asarray(start, float)) - lo) / span, 0.0, 1.0)
         found = least_squares(residuals, x0, jac=jacobian, bounds=(0.0, 1.0), method="trf", xtol=1e-10,
                               ftol=1e-12, gtol=1e-10, max_nfev=200)
         u = lo + span * found.x
@@ -482,13 +505,7 @@ class Plan:
     def _result(self, u, status, evaluations, seconds):
         tips, _ = self.nodes_at(u) if status.status != Status.NO_EQUILIBRIUM else (np.full((self.nodes + 1, 3), np.nan), None)
         errors = np.linalg.norm(tips - self.targets, axis=1)
-        within = errors <= self.tolerance
-        reached = None
-        if within[-1]:
-            k = len(within) - 1
-            while k > 0 and within[k - 1]:
-                k -= 1
-            reached = float(k * self.step)
+        reached = held_from(np.arange(self.nodes + 1) * self.step, errors, self.tolerance)
         message = ""
         if self.objective == "energy" and (reached is None or reached > self.by + 1e-9):
             status = status.replace(status=Status.ABOVE_TOLERANCE) if status.success else status
@@ -507,6 +524,18 @@ class Plan:
         return PlanResult(self.objective, t, list(self.paths), u, list(self.keys), self.temperatures(u.ravel()),
                           self.max_temperatures, tips, errors, self.targets, self.tolerance, status, energy, reached,
                           self.by if self.objective == "energy" else None, message, self.bounds, self.fixed_powers)
+
+
+def held_from(t, errors, tolerance):
+    """The first of the times ``t`` from which ``errors`` stay within ``tolerance`` to the end
+    (None when the last is not within it)."""
+    within = np.asarray(errors) <= tolerance
+    if not within[-1]:
+        return None
+    k = len(within) - 1
+    while k > 0 and within[k - 1]:
+        k -= 1
+    return float(t[k])
 
 
 def read_path(path):

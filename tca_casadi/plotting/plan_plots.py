@@ -8,13 +8,14 @@ from .sweep_plots import line_style
 
 
 def save_plan_png(plan, path):
-    """Three panels against time [s]: each input [mW] (held over its step), each heated TCA's
+    """Three panels against time [s] of a :class:`PlanResult` or a closed loop's
+    :class:`ClosedLoopResult`: each input [mW] (held over its step), each heated TCA's
     temperature [degC] with its type's maximum dashed, the tip's distance from the target [mm]
     with the tolerance dashed and the time it is reached marked. Saves a PNG; returns ``path``."""
     plt = _pyplot()
     fig, axes = plt.subplots(3, 1, figsize=(9, 7.5), sharex=True)
     t, n = plan.t, len(plan.t)
-    held = np.vstack([plan.inputs, plan.inputs[-1:]])
+    held = plan.inputs if len(plan.inputs) == n else np.vstack([plan.inputs, plan.inputs[-1:]])   # per node
     for j, path_name in enumerate(plan.paths):
         axes[0].plot(t, held[:, j] * 1e3, drawstyle="steps-post", label=path_name, **line_style(j, n))
     for j, key in enumerate(plan.keys):
@@ -36,7 +37,8 @@ def save_plan_png(plan, path):
         ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     axes[-1].set_xlabel("time [s]")
     state = "reached" if plan.reached else "not reached"
-    axes[0].set_title(f"plan ({plan.objective}): {state}, energy {plan.energy_J:.3g} J", fontsize=10)
+    name = plan.objective if plan.objective.startswith("mpc") else f"plan ({plan.objective})"
+    axes[0].set_title(f"{name}: {state}, energy {plan.energy_J:.3g} J", fontsize=10)
     fig.tight_layout()
     save_figure(fig, path, dpi=110)
     plt.close(fig)

@@ -248,7 +248,7 @@ Route = Annotated[Union[Straight, Helix, Curve], Field(discriminator="kind")]
 # ----------------------------------------------------------------------------- actuators
 #: a drive's kind -> the unit kind of its value
 DRIVE_UNITS = {"power": "power", "voltage": "voltage", "current": "current", "temperature": "temperature",
-               "setpoint": "temperature"}
+               "setpoint": "temperature", "mpc": "power"}
 
 
 class PiGains(Strict):
@@ -257,14 +257,40 @@ class PiGains(Strict):
     integral: Annotated[float, _quantity("integral_gain"), Field(gt=0)]
 
 
+class MpcSettings(Strict):
+    """A model-predictive controller of the tip (``drive: {kind: mpc, mpc: {...}}``): every
+    ``period`` [s] it plans the powers over ``horizon`` [s] (``nodes`` steps, the minimum-time
+    plan of ``tca-casadi plan``) from the measured temperatures, towards ``target`` [m] shifted
+    by the estimated mismatch of plant and model (``disturbance_gain``: the filter of the
+    measured tip less the model's; ``integral_gain``: of the tip error near the target, per
+    period: no steady offset when the plant differs from the model), and applies the first
+    step."""
+    target: Vector3Length
+    period: Annotated[float, _quantity("time"), Field(gt=0)] = 0.5
+    horizon: Annotated[float, _quantity("time"), Field(gt=0)] = 10.0
+    nodes: Annotated[int, Field(ge=1, le=500)] = 20
+    tolerance: Annotated[float, _quantity("length"), Field(gt=0)] = 1e-4
+    integral_gain: Annotated[float, Field(ge=0, le=1)] = 0.2
+    disturbance_gain: Annotated[float, Field(ge=0, le=1)] = 0.5
+
+    @model_validator(mode="after")
+    def _horizon_holds_a_period(self):
+        if self.horizon < self.period:
+            raise ValueError(f"the horizon ({self.horizon:g} s) is shorter than the period ({self.period:g} s)")
+        return self
+
+
 class TcaDrive(Strict):
     """How a TCA is heated in ``tca-casadi simulate``: ``kind`` ``power`` [W], ``voltage`` [V],
-    ``current`` [A], ``temperature`` [degC] (set directly, as in ``solve``) or ``setpoint``
-    [degC] (a PI controller with ``gains`` and a ``max_power`` [W]), and its ``value``."""
-    kind: Literal["power", "voltage", "current", "temperature", "setpoint"]
+    ``current`` [A], ``temperature`` [degC] (set directly, as in ``solve``), ``setpoint``
+    [degC] (a PI controller with ``gains`` and a ``max_power`` [W]) or ``mpc`` (its power [W]
+    chosen by the model-predictive controller ``mpc``, at most ``max_power``; ``value``: the
+    power before it starts), and its ``value``."""
+    kind: Literal["power", "voltage", "current", "temperature", "setpoint", "mpc"]
     value: Union[float, str] = 0.0
     gains: Optional[PiGains] = None
     max_power: Optional[Annotated[float, _quantity("power"), Field(gt=0)]] = None
+    mpc: Optional[MpcSettings] = None
 
     @model_validator(mode="after")
     def _value_in_its_unit(self):
@@ -273,8 +299,13 @@ class TcaDrive(Strict):
             raise ValueError(f"a {self.kind} drive's value must not be negative (got {self.value:g})")
         if self.kind == "setpoint" and (self.gains is None or self.max_power is None):
             raise ValueError("a setpoint drive needs gains: {proportional, integral} and max_power")
-        if self.kind != "setpoint" and (self.gains is not None or self.max_power is not None):
-            raise ValueError("gains and max_power belong to a setpoint drive")
+        if self.kind != "setpoint" and self.gains is not None:
+            raise ValueError("gains belong to a setpoint drive")
+        if self.kind not in ("setpoint", "mpc") and self.max_power is not None:
+            raise ValueError("max_power belongs to a setpoint or mpc drive")
+        if (self.kind == "mpc") != (self.mpc is not None):
+            raise ValueError("an mpc drive needs its controller's settings, mpc: {target: [x, y, z], period, horizon, "
+                             "...}, and only an mpc drive has them")
         return self
 
 

@@ -112,6 +112,10 @@ class TimeSimulation:
     def __init__(self, sim, duration=None, dt=0.1):
         self.sim = sim
         scenario = sim.scenario
+        from ..control.mpc import mpc_drives
+        if mpc_drives(scenario):
+            raise ScenarioError(f"{', '.join(k for k, _ in mpc_drives(scenario))}: an mpc drive runs in the closed loop "
+                                "(tca_casadi.control.ClosedLoop; tca-casadi simulate runs it)")
         events = scenario.timeline
         ends = [e.at + (e.ramp or 0.0) for e in events]
         self.duration = float(duration or scenario.duration or (max(ends) if ends else 0.0))

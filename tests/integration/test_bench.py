@@ -39,3 +39,13 @@ def test_scaling_quick(tmp_path, capsys):
         assert result[kind]["exponents"]["warm_s"] is not None
     out = capsys.readouterr().out
     assert "exponents (larger half)" in out and (tmp_path / "bench_scaling.json").exists()
+
+
+def test_control_quick(tmp_path, capsys):
+    """``bench.py --control --quick``: the 10-node plan reaches its target and the 5 s closed loop
+    reports its solve times."""
+    from bench import main
+    result = main(["--control", "--quick", "-o", str(tmp_path / "bench.json")])
+    assert result["plan bending module"]["converged"] and result["plan bending module"]["reached_at_s"] is not None
+    assert result["mpc bending module"]["periods"] == 5 and result["mpc bending module"]["solve_time_median_s"] > 0
+    assert "controller solve median" in capsys.readouterr().out and (tmp_path / "bench_control.json").exists()
