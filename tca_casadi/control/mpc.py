@@ -173,6 +173,13 @@ class ClosedLoop:
         self.step = Plan(self.plant, self.target, horizon=settings.period, nodes=1, vary=self.paths,
                          bounds=self.bounds, tolerance=settings.tolerance)
 
+    def _shifted(self, inputs):
+        """The next period's start: the plan's inputs (N, k) one period later in time (the last
+        held), whatever the ratio of the period to the plan's step."""
+        shift = self.settings.period / self.controller.step
+        index = np.minimum(np.floor(np.arange(len(inputs)) + shift + 1e-9).astype(int), len(inputs) - 1)
+        return inputs[index].ravel()
+
     def run(self, progress=None):
         """The :class:`ClosedLoopResult`; ``progress(fraction, text)`` after each period."""
         settings, k = self.settings, len(self.paths)
@@ -190,7 +197,7 @@ class ClosedLoop:
                 seconds = time.perf_counter() - started
                 model_tip = plan.tips[0]                    # the model's tip at the measured temperatures
                 applied = plan.inputs[0]
-                start = np.vstack([plan.inputs[1:], plan.inputs[-1:]]).ravel()
+                start = self._shifted(plan.inputs)
                 converged = plan.converged
             else:
                 seconds, converged = float("nan"), True

@@ -392,8 +392,11 @@ class Plan:
         return self._result(u, status, evaluations, time.perf_counter() - started)
 
     def initial_inputs(self):
-        """(N k,) [W]: the holding powers ``G (T* - T_amb)`` of the temperatures ``T*`` that
-        inverse statics finds for the target (its nearest pose if unreachable), at every node."""
+        """(N k,) [W]: for each varied TCA, the bang-bang way to the temperature ``T*`` that
+        inverse statics finds for the target (its nearest pose if unreachable): the bound towards
+        ``T*`` while a whole step does not pass it, the power that lands on it, then its holding
+        power ``G (T* - T_amb)``, from the TCA's own thermal step (coupling ignored). For one TCA
+        that is the minimum-time plan itself, so least squares starts next to its answer."""
         from ..studies.inverse import InverseStatics
         from ..studies.targets import Target
         varied = [self.keys.index(path.rsplit(".drive.value", 1)[0]) for path in self.paths]
@@ -404,8 +407,16 @@ class Plan:
                                  bounds=(low, max(high, low + 1e-3)), tolerance=self.tolerance)
         answer = inverse.solve(Target.create(self.targets[-1]))
         hold = np.array([answer.temperatures[f"{self.keys[j]}.temperature"] for j in varied])
-        powers = np.clip(conductance * (hold - self.ambient), self.bounds[:, 0], self.bounds[:, 1])
-        return np.tile(powers, self.nodes)
+        inputs = np.empty((self.nodes, len(varied)))
+        for i, j in enumerate(varied):
+            law = self.laws[j]
+            decay = np.exp(-self.step * law.conductance / law.heat_capacity)      # T' = a T + (1 - a)(T_amb + P/G)
+            temperature = self.T0[j]
+            for step in range(self.nodes):
+                landing = law.conductance * ((hold[i] - decay * temperature) / (1 - decay) - self.ambient)
+                inputs[step, i] = np.clip(landing, self.bounds[i, 0], self.bounds[i, 1])
+                temperature = decay * temperature + (1 - decay) * (self.ambient + inputs[step, i] / law.conductance)
+        return inputs.ravel()
 
     def _scaled(self):
         lo = np.tile(self.bounds[:, 0], self.nodes)

@@ -47,5 +47,5 @@ def test_control_quick(tmp_path, capsys):
     from bench import main
     result = main(["--control", "--quick", "-o", str(tmp_path / "bench.json")])
     assert result["plan bending module"]["converged"] and result["plan bending module"]["reached_at_s"] is not None
-    assert result["mpc bending module"]["periods"] == 5 and result["mpc bending module"]["solve_time_median_s"] > 0
+    assert result["mpc bending module"]["periods"] == 10 and result["mpc bending module"]["solve_time_median_s"] > 0
     assert "controller solve median" in capsys.readouterr().out and (tmp_path / "bench_control.json").exists()
