@@ -159,6 +159,8 @@ class ClosedLoop:
         self.plant = Simulation.from_file(source, list(overrides) + list(plant_overrides) + as_power,
                                           allow_code=allow_code)
         self.plant_overrides = list(plant_overrides)
+        for override in self.plant_overrides:
+            self._check_changes(source, list(overrides) + as_power, override, allow_code)
         self.paths = [f"{key}.drive.value" for key, _ in drives]
         self.target = np.asarray(settings.target, float)
         bounds = [d.max_power for _, d in drives]
@@ -172,6 +174,22 @@ class ClosedLoop:
                                vary=self.paths, bounds=self.bounds, tolerance=settings.tolerance)
         self.step = Plan(self.plant, self.target, horizon=settings.period, nodes=1, vary=self.paths,
                          bounds=self.bounds, tolerance=settings.tolerance)
+
+    def _check_changes(self, source, overrides, override, allow_code):
+        """A ScenarioError if the plant override ``override`` changes neither a parameter of the
+        robot nor a TCA's thermal constants (a key the robot does not use: a typo)."""
+        from ..scenario.sources import did_you_mean
+        from ..simulation import Simulation
+        changed = Simulation.from_file(source, overrides + [override], allow_code=allow_code)
+        def constants(sim):
+            return np.array([[getattr(a.thermal_law(sim.scenario), name) for name in
+                              ("heat_capacity", "conductance", "resistance", "resistance_coefficient")]
+                             for a in sim.robot.thermal_actuators], float)
+        same_laws = np.array_equal(constants(changed), constants(self.model), equal_nan=True)
+        if same_laws and np.array_equal(changed.params, self.model.params):
+            path = override.partition("=")[0].strip()
+            raise ScenarioError(f"--plant-set {override!r} changes nothing the robot uses"
+                                + did_you_mean(path, self.model.robot.layout.names()))
 
     def _shifted(self, inputs):
         """The next period's start: the plan's inputs (N, k) one period later in time (the last

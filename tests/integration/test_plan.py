@@ -217,6 +217,10 @@ def test_cli_simulate_runs_the_closed_loop_and_reports_its_solve_times(tmp_path,
 def test_closed_loop_bad_input(tmp_path, capsys):
     assert main(["simulate", str(HEATING), "--plant-set", PLANT[0], "-o", str(tmp_path), "--quiet"]) == 2
     assert "--plant-set makes the plant of a closed loop differ from its model" in capsys.readouterr().err
+    assert main(["simulate", str(MPC), "--plant-set", "materials.ecoflex.youngs_modulus=1 MPa", "-o", str(tmp_path),
+                 "--quiet"]) == 2
+    assert ("--plant-set 'materials.ecoflex.youngs_modulus=1 MPa' changes nothing the robot uses (did you mean "
+            "'materials.ecoflex30.youngs_modulus'?)") in capsys.readouterr().err
     assert main(["simulate", str(MPC), "--set", "bending.tca2.drive.mpc.horizon=0.5 s", "-o", str(tmp_path),
                  "--quiet"]) == 2
     assert "the horizon (0.5 s) is shorter than the period (1 s)" in capsys.readouterr().err
