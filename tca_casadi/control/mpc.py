@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ScenarioError
-from .plan import HeatingRecord, Plan, held_from
+from ..errors import ScenarioError, SolverError
+from .plan import HeatingRecord, Plan, _NoEquilibrium, held_from
 
 #: the tip error is integrated only within this many tolerances of the target (anti-windup)
 INTEGRATION_WINDOW = 3.0
@@ -203,7 +203,7 @@ class ClosedLoop:
         settings, k = self.settings, len(self.paths)
         T = self.step.T0.copy()
         disturbance, integral = np.zeros(3), np.zeros(3)
-        rows, start = [], None
+        rows, start, message = [], None, ""
         for p in range(self.periods + 1):
             self.step.restart(T)
             applied = np.zeros(k) if p == self.periods else None
@@ -219,7 +219,13 @@ class ClosedLoop:
                 converged = plan.converged
             else:
                 seconds, converged = float("nan"), True
-            tips, _ = self.step.nodes_at(np.asarray(applied, float))
+            try:
+                tips, _ = self.step.nodes_at(np.asarray(applied, float))
+            except _NoEquilibrium as exc:          # the run stops here; what came before is kept
+                if not rows:
+                    raise SolverError(f"closed loop: the plant has no equilibrium at t = 0 ({exc})") from None
+                message = f"stopped at t = {p * settings.period:g} s: the plant has no equilibrium ({exc})"
+                break
             tip = tips[0]
             rows.append((p * settings.period, applied, T.copy(), tip, offset.copy(), seconds, converged))
             if p < self.periods:
@@ -232,7 +238,8 @@ class ClosedLoop:
                 progress((p + 1) / (self.periods + 1), f"t = {p * settings.period:.4g} s")
         t = np.array([r[0] for r in rows])
         inputs = np.array([r[1] for r in rows])
-        inputs[-1] = inputs[-2] if len(inputs) > 1 else inputs[-1]
+        if not message and len(inputs) > 1:          # nothing is applied after the end: the last held
+            inputs[-1] = inputs[-2]
         tips = np.array([r[3] for r in rows])
         return ClosedLoopResult(
             "mpc (closed loop)", t, list(self.paths), inputs, list(self.step.keys), np.array([r[2] for r in rows]),
@@ -241,4 +248,4 @@ class ClosedLoop:
             self.target, settings.tolerance,
             {"period_s": settings.period, "horizon_s": self.controller.horizon, "nodes": settings.nodes,
              "integral_gain": settings.integral_gain, "disturbance_gain": settings.disturbance_gain, "bounds_W": self.controller.bounds.tolist()},
-            self.plant_overrides)
+            self.plant_overrides, message)

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ScenarioError
+from ..errors import ScenarioError, SolverError
 from ..solvers.thermal import steady_state, zero_order_hold
 from ..status import SolveStatus, Status
 
@@ -301,22 +301,31 @@ class Plan:
         return rows
 
     def _thermal_matrices(self):
-        """``T_k = T_free[k] + M[k] u`` for k = 0..N (u: the inputs, node-major, (N k,))."""
+        """``T_k = T_free[k] + M[k] u`` for k = 0..N (u: the inputs, node-major, (N k,)): the
+        step (``zero_order_hold``) and ``M`` once, ``T_free`` from ``T0`` (:meth:`_free_response`)."""
         n, k, N = len(self.keys), len(self.paths), self.nodes
-        Phi, Gamma, offset = zero_order_hold(self.laws, self.ambient, self.step, self.coupling)
+        self._hold = zero_order_hold(self.laws, self.ambient, self.step, self.coupling)
+        Phi, Gamma, _ = self._hold
         E = np.zeros((n, k))
         for i, path in enumerate(self.paths):
             E[self.keys.index(path.rsplit(".drive.value", 1)[0]), i] = 1.0
-        fixed = self.powers0 * (1.0 - E.sum(axis=1))            # the inputs not varied keep their value
-        self.fixed_powers = {key: float(p) for key, p in zip(self.keys, fixed) if E[self.keys.index(key)].sum() == 0}
-        self.T_free = np.zeros((N + 1, n))
+        self._fixed = self.powers0 * (1.0 - E.sum(axis=1))            # the inputs not varied keep their value
+        self.fixed_powers = {key: float(p) for key, p in zip(self.keys, self._fixed)
+                             if E[self.keys.index(key)].sum() == 0}
         self.M = np.zeros((N + 1, n, N * k))
-        self.T_free[0] = self.T0
         for step in range(N):
-            self.T_free[step + 1] = Phi @ self.T_free[step] + Gamma @ fixed + offset
             self.M[step + 1] = Phi @ self.M[step]
             self.M[step + 1][:, step * k:(step + 1) * k] += Gamma @ E
-        self._fixed_energy = float(np.sum(fixed)) * self.horizon
+        self._fixed_energy = float(np.sum(self._fixed)) * self.horizon
+        self._free_response()
+
+    def _free_response(self):
+        """``T_free`` (N + 1, n) [degC]: the temperatures from ``T0`` with no varied input."""
+        Phi, Gamma, offset = self._hold
+        self.T_free = np.zeros((self.nodes + 1, len(self.keys)))
+        self.T_free[0] = self.T0
+        for step in range(self.nodes):
+            self.T_free[step + 1] = Phi @ self.T_free[step] + Gamma @ self._fixed + offset
 
     def restart(self, initial_temperatures, target=None):
         """Plan again from ``initial_temperatures`` [degC] (and a new ``target``), keeping the
@@ -324,7 +333,7 @@ class Plan:
         self.T0 = np.asarray(initial_temperatures, float).reshape(len(self.heated))
         if target is not None:
             self.targets = self._targets(target)
-        self._thermal_matrices()
+        self._free_response()
 
     def temperatures(self, u):
         """(N + 1, n) [degC] at the inputs ``u`` ((N k,) W)."""
@@ -338,7 +347,7 @@ class Plan:
         params[self.temperature_index] = self.T0
         first = sim.solve_at(params)
         if not first.converged:
-            raise ScenarioError(f"plan: no equilibrium at t = 0: {first.message}")
+            raise SolverError(f"plan: no equilibrium at t = 0: {first.message}")
         solver = sim.solver()
         return solver, [first.raw["w"]] * (self.nodes + 1), [None] * (self.nodes + 1)
 

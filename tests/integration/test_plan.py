@@ -197,7 +197,7 @@ def test_mpc_settles_on_a_plant_that_differs_from_its_model():
     corrected = ClosedLoop(MPC, ["duration=25"], PLANT).run()
     assert corrected.completed and corrected.reached and corrected.reached_at_s <= 10.0, corrected.summary()
     assert corrected.errors[-1] < 0.01e-3
-    blind = ClosedLoop(MPC, ["duration=25", "bending.tca2.drive.mpc.integral_gain=0",
+    blind = ClosedLoop(MPC, ["duration=15", "bending.tca2.drive.mpc.integral_gain=0",
                              "bending.tca2.drive.mpc.disturbance_gain=0"], PLANT).run()
     assert blind.errors[-1] > 10 * corrected.errors[-1]
 
@@ -228,3 +228,25 @@ def test_closed_loop_bad_input(tmp_path, capsys):
     assert "an mpc drive needs its controller's settings" in capsys.readouterr().err
     with pytest.raises(Exception, match="an mpc drive runs in the closed loop"):
         TimeSimulation(Simulation.from_file(MPC), dt=1.0)
+
+
+def test_a_plant_without_equilibrium_stops_the_loop_and_keeps_what_came_before(monkeypatch):
+    """The plant's equilibrium made to fail from the third period's solve on: the run stops there,
+    says why, keeps the periods before and is not complete."""
+    from tca_casadi.control import ClosedLoop
+    from tca_casadi.control.plan import _NoEquilibrium
+    loop = ClosedLoop(MPC, ["duration=4"])
+    real, calls = loop.step.nodes_at, []
+
+    def failing(u, derivatives=False):
+        calls.append(1)
+        if len(calls) > 2:
+            raise _NoEquilibrium(1, 1.0, "made to fail")
+        return real(u, derivatives)
+
+    monkeypatch.setattr(loop.step, "nodes_at", failing)
+    result = loop.run()
+    assert not result.completed and len(result.t) == 2
+    assert result.message.startswith("stopped at t = 2 s: the plant has no equilibrium")
+    assert result.inputs[-1, 0] > 0                   # the input applied there, not a copy of the one before
+    assert "stopped at t = 2 s" in result.summary()
