@@ -271,6 +271,42 @@ def till_cantilever(duration, jit=False):
             "first_mode_hz": first_mode(data["t_s"], data["tip_x_m"]), "euler_bernoulli_hz": 5.596}
 
 
+def till_stages(duration):
+    """Where the time of Till's cantilever goes (:mod:`stages`): the run of ``duration`` [s]
+    in-process (BDF2, 2 ms; the scenario, the NLP and the static start before it, timed apart),
+    by stage, with each stage's time per step."""
+    from stages import StageProfile
+    from tca_casadi.studies.timeline import TimeSimulation
+    started = time.perf_counter()
+    sim = Simulation.from_file(SCENARIOS / "analytic" / "steel_cantilever.yaml", [f"duration={duration}"])
+    run = TimeSimulation(sim, dt=0.002)
+    setup = time.perf_counter() - started
+    with StageProfile() as profile:
+        started = time.perf_counter()
+        series = run.run()
+        total = time.perf_counter() - started
+    return {"duration_s": duration, "steps": len(series.t) - 1, "setup_s": setup, "run_s": total,
+            "stages": profile.report(total)}
+
+
+def warm_stages(repeats=200):
+    """Where a warm Newton solve of the bending module after +1 degC goes (:mod:`stages`):
+    ``repeats`` solves alternating between the two temperatures, each from the other's solution."""
+    from stages import StageProfile
+    sim = Simulation.from_file(SCENARIOS / "bending_module.yaml", ["solver.algorithm=newton"])
+    base = sim.solve(warn=False)
+    solver = sim.solver("collocation")
+    points = [sim.params.copy(), nudge(sim, sim.params)]
+    last = solver.solve(points[1], base)
+    with StageProfile() as profile:
+        started = time.perf_counter()
+        for k in range(repeats):
+            last = solver.solve(points[k % 2], last)
+        total = time.perf_counter() - started
+    return {"repeats": repeats, "solve_s": total / repeats, "converged": bool(last.converged),
+            "stages": profile.report(total)}
+
+
 def print_till(runs):
     for r in runs:
         print(f"dynamics, Till's steel cantilever (BDF2, 2 ms, {r['duration_s']:g} s, whole simulate call"
@@ -596,13 +632,26 @@ def dynamics_rates(quick):
     motion = {name: [dynamics_rate(name, dt, 5 if quick else 50, jit) for jit in ((False,) if quick else (False, True))
                      for dt in (0.002, 0.01)] for name in (["bending module"] if quick else list(DYNAMIC_PROBLEMS))}
     motion["till"] = [till_cantilever(0.5 if quick else 25.0, jit) for jit in ((False,) if quick else (False, True))]
+    motion["till_stages"] = till_stages(0.5 if quick else 5.0)
+    motion["warm_stages"] = warm_stages(20 if quick else 200)
     return motion
 
 
 def print_dynamics(motion):
+    from stages import print_stages
     for name, runs in motion.items():
         if name == "till":
             print_till(runs)
+            continue
+        if name == "till_stages":
+            print_stages(f"where the time goes: Till's cantilever, {runs['steps']} steps of 2 ms in-process "
+                         f"({runs['run_s']:.2f} s; scenario, NLP and static start before it {runs['setup_s']:.2f} s)",
+                         runs["stages"], per=(runs["steps"], "step"))
+            continue
+        if name == "warm_stages":
+            print_stages(f"where the time goes: bending module, warm Newton solve after +1 degC "
+                         f"({runs['solve_s'] * 1e3:.2f} ms each, {runs['repeats']} solves)",
+                         runs["stages"], per=(runs["repeats"], "solve"))
             continue
         print(f"dynamics (BDF2) {name}: " + ", ".join(
             f"dt {r['dt_s'] * 1e3:g} ms{' jit' if r['jit'] else ''}: {r['step_s'] * 1e3:.2f} ms per step "

@@ -141,6 +141,12 @@ def build_parser():
     _scenario_arguments(plan)
     plan.add_argument("--target-position", nargs=3, metavar=("X", "Y", "Z"),
                       help="target tip position [m] (or with units, '12 mm'); time and energy")
+    plan.add_argument("--target-direction", nargs=3, type=float, metavar=("DX", "DY", "DZ"),
+                      help="also aim the point's tangent along this direction (time and energy)")
+    plan.add_argument("--angle-tolerance", default=None, metavar="ANGLE",
+                      help="with --target-direction: the angle counted as reached [rad] (or with units, '0.5 deg'; default 1 deg)")
+    plan.add_argument("--point", default="tip", help="'tip' (default) or a module name: the point (its end) to bring "
+                                                      "to the target")
     plan.add_argument("--path", type=Path, default=None, metavar="CSV",
                       help="track: the tip path, a CSV with columns t [s], x, y, z [m] (units in the header)")
     plan.add_argument("--objective", choices=["time", "energy", "track"], default="time",
@@ -154,8 +160,8 @@ def build_parser():
                       help="a heated TCA's drive value to plan (MODULE.TCA.drive.value; repeatable; default every "
                            "heated TCA's)")
     plan.add_argument("--bounds", nargs=2, metavar=("LO", "HI"),
-                      help="bounds of the powers [W] (units allowed; default 0 to the power that holds each TCA "
-                           "at its type's max_temperature)")
+                      help="bounds of the inputs, in their drives' units (W, V or A; units allowed, '3 V'; "
+                           "default 0 to the value that holds each TCA at its type's max_temperature)")
     plan.add_argument("--tolerance", default=None, metavar="M",
                       help="distance from the target within which it counts as reached (default 0.1 mm)")
     _output_arguments(plan, "plan", "plan.png")
@@ -626,8 +632,11 @@ def _plan(args):
                for name, kind in (("horizon", "time"), ("by", "time"), ("tolerance", "length"))
                if getattr(args, name) is not None}
     if args.bounds is not None:
-        options["bounds"] = _quantities(args.bounds, "power", "--bounds")
-    planner = Plan(sim, target, objective=args.objective, nodes=args.nodes, vary=args.vary, **options)
+        options["bounds"] = list(args.bounds)             # each in its drive's unit (Plan converts)
+    if args.angle_tolerance is not None:
+        options["angle_tolerance"] = _quantities([args.angle_tolerance], "angle", "--angle-tolerance")[0]
+    planner = Plan(sim, target, objective=args.objective, nodes=args.nodes, vary=args.vary, point=args.point,
+                   direction=args.target_direction, **options)
     with _results(args, sim, "plan", ["plan.csv", "plan.json", "plan_timeline.yaml", "plan.png"],
                   stale=["plan.png"] if args.no_plot else [], default="plan") as run:
         result = _with_progress(planner.solve, "plan", quiet=args.quiet)

@@ -35,8 +35,25 @@ from ..errors import ScenarioError, SolverError
 from ..solvers.thermal import steady_state, zero_order_hold
 from ..status import SolveStatus, Status
 
-#: the drive kinds a plan varies and can hold (their power does not depend on the temperature)
-PLANNED_KINDS = ("power",)
+#: the drive kinds a plan varies and can hold: electrical ones whose power does not depend on the
+#: temperature (a voltage or current drive with a constant resistance: P = V^2 / R, I^2 R)
+PLANNED_KINDS = ("power", "voltage", "current")
+#: the unit of each planned drive kind's value
+DRIVE_UNIT = {"power": "W", "voltage": "V", "current": "A"}
+
+
+def power_of(kind, resistance, value):
+    """Electrical power [W] of a drive of ``kind`` and ``value`` (W, V or A) through a
+    ``resistance`` [ohm] (unused for power)."""
+    value = np.asarray(value, float)
+    return {"power": value, "voltage": value ** 2 / resistance, "current": value ** 2 * resistance}[kind]
+
+
+def value_of(kind, resistance, power):
+    """The drive value (W, V or A) of ``kind`` that delivers ``power`` [W] (>= 0): the inverse
+    of :func:`power_of`."""
+    power = np.maximum(np.asarray(power, float), 0.0)
+    return {"power": power, "voltage": np.sqrt(power * resistance), "current": np.sqrt(power / resistance)}[kind]
 #: temperatures may exceed ``max_temperature`` by at most this much [K] in a converged plan
 TEMPERATURE_SLACK = 1e-3
 #: weight of the least-heating term that picks one plan where several reach the target equally
@@ -49,8 +66,8 @@ MARGIN = 0.98
 
 @dataclass
 class HeatingRecord:
-    """What a plan and a closed loop both hold: times ``t`` [s], the varied inputs ``inputs``
-    [W] (``paths``), the heated TCAs' ``temperatures`` [degC] (``keys``) and their
+    """What a plan and a closed loop both hold: times ``t`` [s], the varied inputs' electrical
+    powers ``inputs`` [W] (``paths``), the heated TCAs' ``temperatures`` [degC] (``keys``) and their
     ``max_temperatures``, the tip ``tips`` [m] and its distance ``errors`` [m] from where it
     should be (what :func:`~tca_casadi.plotting.plan_plots.save_plan_png` draws)."""
     objective: str
@@ -66,8 +83,8 @@ class HeatingRecord:
 
 @dataclass
 class PlanResult(HeatingRecord):
-    """A plan: the node times ``t`` (N + 1,) [s], the varied ``inputs`` (N, k) [W] (``paths``
-    their scenario paths), the heated TCAs' ``temperatures`` (N + 1, n) [degC] (``keys``), the
+    """A plan: the node times ``t`` (N + 1,) [s], the varied inputs' powers ``inputs`` (N, k) [W]
+    (``paths`` their scenario paths; :meth:`drive_values` in the drives' own units), the heated TCAs' ``temperatures`` (N + 1, n) [degC] (``keys``), the
     tip ``tips`` (N + 1, 3) [m] and its distance ``errors`` (N + 1,) [m] from ``targets`` (N + 1,
     3) [m]: the target at every node, or the tracked path there."""
     targets: np.ndarray
@@ -79,6 +96,27 @@ class PlanResult(HeatingRecord):
     message: str = ""
     bounds: np.ndarray = None
     fixed_powers: dict = field(default_factory=dict)
+    #: per varied input: its drive's kind (power, voltage, current) and resistance [ohm]
+    kinds: list = None
+    resistances: list = None
+    #: the point aimed ('tip' or a module, whose end), and with a target direction: the point's
+    #: tangent's angle from it [rad] at every node (N + 1,) and the angle counted as reached
+    point: str = "tip"
+    direction: np.ndarray = None
+    angle_errors: np.ndarray = None
+    angle_tolerance: float = None
+
+    def drive_values(self):
+        """(N, k): the planned inputs in their drives' units (W, V or A)."""
+        kinds = self.kinds or ["power"] * len(self.paths)
+        resistances = self.resistances or [np.nan] * len(self.paths)
+        return np.column_stack([value_of(kind, r, self.inputs[:, j])
+                                for j, (kind, r) in enumerate(zip(kinds, resistances))])
+
+    @property
+    def units(self):
+        """Per varied input, its drive value's unit."""
+        return [DRIVE_UNIT[kind] for kind in (self.kinds or ["power"] * len(self.paths))]
 
     @property
     def target(self):
@@ -97,8 +135,8 @@ class PlanResult(HeatingRecord):
         """The schedule as ``simulate`` takes it: ``{duration, timeline: [{at, set}, ...]}`` (one
         event per node where an input changes, values in W)."""
         events, last = [], None
-        for k, values in enumerate(self.inputs):
-            current = [f"{v:.10g} W" for v in values]          # the same to 1e-10: one event
+        for k, values in enumerate(self.drive_values()):
+            current = [f"{v:.12g} {unit}" for v, unit in zip(values, self.units)]   # the same: one event
             if current != last:
                 events.append({"at": f"{self.t[k]:.12g} s", "set": dict(zip(self.paths, current))})
                 last = current
@@ -119,16 +157,24 @@ class PlanResult(HeatingRecord):
                  (f"  path of {len(self.targets)} nodes, RMS distance {self.rms_error * 1e3:.4g} mm, to "
                   if self.objective == "track" else "  target ")
                  + "[mm]: " + " ".join(f"{v * 1e3:+.4f}" for v in self.target)
-                 + f", tolerance {self.tolerance * 1e3:.4g} mm",
+                 + f", tolerance {self.tolerance * 1e3:.4g} mm" + ("" if self.point == "tip" else f" (the end of {self.point})")
+                 + ("" if self.direction is None else
+                    "; direction " + " ".join(f"{v:+.4f}" for v in self.direction)
+                    + f" within {np.degrees(self.angle_tolerance):.3g} deg (at the end "
+                    f"{np.degrees(self.angle_errors[-1]):.3g} deg)"),
                  (f"  within the tolerance of the path from {self.reached_at_s:.4g} s to {self.t[-1]:.4g} s"
                   if self.objective == "track" else
                   f"  reached at {self.reached_at_s:.4g} s and held to {self.t[-1]:.4g} s") if self.reached else
                  f"  not within the tolerance by {self.t[-1]:.4g} s: the closest is {np.min(self.errors) * 1e3:.4g} mm "
-                 f"at {self.t[int(np.argmin(self.errors))]:.4g} s",
+                 f"at {self.t[int(np.argmin(self.errors))]:.4g} s" + ("" if self.direction is None else
+                                                                     f", the smallest angle {np.degrees(np.min(self.angle_errors)):.3g} deg"),
                  f"  electrical energy {self.energy_J:.4g} J over {self.t[-1]:.4g} s ({len(self.t) - 1} steps of "
                  f"{self.t[1] - self.t[0]:.4g} s)"]
-        for j, path in enumerate(self.paths):
-            lines.append(f"  {path:<28} {np.min(self.inputs[:, j]):.4g} to {np.max(self.inputs[:, j]):.4g} W")
+        values = self.drive_values()
+        for j, (path, unit) in enumerate(zip(self.paths, self.units)):
+            lines.append(f"  {path:<28} {np.min(values[:, j]):.4g} to {np.max(values[:, j]):.4g} {unit}"
+                         + ("" if unit == "W" else f" ({np.min(self.inputs[:, j]):.4g} to "
+                                                    f"{np.max(self.inputs[:, j]):.4g} W)"))
         for j, key in enumerate(self.keys):
             lines.append(f"  {key + '.temperature':<28} peak {np.max(self.temperatures[:, j]):.2f} degC "
                          f"(max {self.max_temperatures[j]:g})")
@@ -142,19 +188,26 @@ class PlanResult(HeatingRecord):
         return float(np.sqrt(np.mean(self.errors[1:] ** 2)))
 
     def header(self):
-        return (["t [s]"] + [f"{p} [W]" for p in self.paths] + [f"{k}.temperature [degC]" for k in self.keys]
+        powers = [f"{p.rsplit('.drive.value', 1)[0]}.power [W]" for p, unit in zip(self.paths, self.units)
+                  if unit != "W"]
+        return (["t [s]"] + [f"{p} [{unit}]" for p, unit in zip(self.paths, self.units)] + powers
+                + [f"{k}.temperature [degC]" for k in self.keys]
                 + ["tip_x [m]", "tip_y [m]", "tip_z [m]", "target_x [m]", "target_y [m]", "target_z [m]",
-                   "tip_error [m]"])
+                   "tip_error [m]"] + ([] if self.direction is None else ["angle_error [rad]"]))
 
     def rows(self):
         """One row per node; an input is the value held from that node on (the last is held to the
         end)."""
-        out = []
+        out, values = [], self.drive_values()
+        electric = [j for j, unit in enumerate(self.units) if unit != "W"]
         for k, t in enumerate(self.t):
-            held = self.inputs[min(k, len(self.inputs) - 1)]
-            out.append([f"{t:.12g}"] + [f"{v:.10g}" for v in held] + [f"{v:.10g}" for v in self.temperatures[k]]
+            step = min(k, len(self.inputs) - 1)
+            held, power = values[step], self.inputs[step, electric]
+            out.append([f"{t:.12g}"] + [f"{v:.12g}" for v in held] + [f"{v:.10g}" for v in power]
+                       + [f"{v:.10g}" for v in self.temperatures[k]]
                        + [f"{v:.10g}" for v in self.tips[k]] + [f"{v:.10g}" for v in self.targets[k]]
-                       + [f"{self.errors[k]:.10g}"])
+                       + [f"{self.errors[k]:.10g}"]
+                       + ([] if self.direction is None else [f"{self.angle_errors[k]:.10g}"]))
         return out
 
     def to_dict(self):
@@ -162,11 +215,16 @@ class PlanResult(HeatingRecord):
                 "reached_at_s": self.reached_at_s, "by_s": self.by_s, "energy_J": self.energy_J,
                 "target_m": self.target.tolist(), "rms_error_m": self.rms_error, "tolerance_m": self.tolerance, "horizon_s": float(self.t[-1]),
                 "nodes": len(self.t) - 1, "step_s": float(self.t[1] - self.t[0]), "inputs": self.paths,
+                "input_units": self.units, "input_kinds": self.kinds or ["power"] * len(self.paths),
                 "bounds_W": None if self.bounds is None else self.bounds.tolist(),
                 "fixed_powers_W": self.fixed_powers,
                 "peak_temperatures_degC": dict(zip(self.keys, np.max(self.temperatures, axis=0).tolist())),
                 "max_temperatures_degC": dict(zip(self.keys, self.max_temperatures.tolist())),
                 "final_error_m": float(self.errors[-1]), "status": self.result.as_dict(), "message": self.message,
+                "point": self.point,
+                "target_direction": None if self.direction is None else self.direction.tolist(),
+                "angle_tolerance_rad": self.angle_tolerance,
+                "final_angle_error_rad": None if self.angle_errors is None else float(self.angle_errors[-1]),
                 "timeline": self.timeline()}
 
     def save(self, directory, plot=True):
@@ -208,9 +266,9 @@ class Plan:
         Time steps N on the horizon.
     vary : list of str, optional
         ``MODULE.TCA.drive.value`` paths of the inputs (default every heated TCA's).
-    bounds : (float, float), optional
-        [W] for every input (default 0 to the power that holds the TCA at its type's
-        ``max_temperature``).
+    bounds : (float or str, float or str), optional
+        For every input, in its drive's unit (W, V or A; a string may carry its unit, "3 V";
+        default 0 to the value that holds the TCA at its type's ``max_temperature``).
     tolerance : float
         Tip distance [m] within which the target counts as reached.
     by : float, optional
@@ -219,10 +277,16 @@ class Plan:
     initial_temperatures : array_like, optional
         The heated TCAs' temperatures [degC] at t = 0 (default the steady state of their drives;
         a controller plans from measured ones, :meth:`restart`).
+    point : str
+        'tip' or a module's name: the point (its end) brought to the target.
+    direction : array_like (3,), optional
+        Also aim the point's tangent ``R e_z`` along this direction (``time`` and ``energy``),
+        reached within ``angle_tolerance`` [rad].
     """
 
     def __init__(self, sim, target, objective="time", horizon=10.0, nodes=60, vary=None, bounds=None,
-                 tolerance=1e-4, by=None, initial_temperatures=None):
+                 tolerance=1e-4, by=None, initial_temperatures=None, point="tip", direction=None,
+                 angle_tolerance=np.radians(1.0)):
         from ..studies.timeline import TimeSimulation
         if objective not in OBJECTIVES:
             raise ScenarioError(f"--objective {objective!r}: one of {', '.join(OBJECTIVES)}")
@@ -234,6 +298,10 @@ class Plan:
             raise ScenarioError(f"--tolerance must be positive (got {tolerance:g} m)")
         self.sim, self.objective, self.horizon, self.nodes = sim, objective, float(horizon), int(nodes)
         self.tolerance = float(tolerance)
+        self.point, self.point_index = self._point(point)
+        self.direction, self.angle_tolerance = self._direction(direction), float(angle_tolerance)
+        if not self.angle_tolerance > 0:
+            raise ScenarioError(f"--angle-tolerance must be positive (got {np.degrees(self.angle_tolerance):g} deg)")
         self.step = self.horizon / self.nodes
         self.targets = self._targets(target)
         self.by = self.horizon if by is None else float(by)
@@ -248,13 +316,22 @@ class Plan:
         kinds = {a.key: TimeSimulation._drive(sim.scenario, a).kind for a in self.heated}
         other = {key: kind for key, kind in kinds.items() if kind not in PLANNED_KINDS}
         if other:
-            raise ScenarioError("plan: only power drives are planned (yet); " + ", ".join(
+            raise ScenarioError("plan: power, voltage and current drives are planned; " + ", ".join(
                 f"{key} has a {kind} drive" for key, kind in other.items()))
+        for actuator, law in zip(self.heated, self.laws):
+            if kinds[actuator.key] != "power" and law.resistance_coefficient != 0:
+                raise ScenarioError(f"plan: {actuator.key} has a {kinds[actuator.key]} drive through a resistance that "
+                                    "changes with temperature (its type's resistance_temperature_coefficient is "
+                                    f"{law.resistance_coefficient:g} 1/K): its power is then not a function of its "
+                                    "input alone; plan with a power drive, or set the coefficient to 0")
         self.keys = [a.key for a in self.heated]
         self.paths = self._varied(vary)
+        self.kinds = [kinds[self._key_of(path)] for path in self.paths]
+        self.resistances = [float(self.laws[self.keys.index(self._key_of(path))].resistance) for path in self.paths]
         self.ambient = float(sim.scenario.ambient_temperature)
         drives = timed.drives()
-        self.powers0 = np.array([d.schedule(0.0, left=True) for d in drives], float)
+        self.powers0 = np.array([power_of(d.kind, law.resistance, d.schedule(0.0, left=True))
+                                 for d, law in zip(drives, self.laws)], float)
         self.T0 = (steady_state(self.laws, drives, self.ambient, self.coupling)[:, 0] if initial_temperatures is None
                    else np.asarray(initial_temperatures, float).reshape(len(self.heated)))
         self.max_temperatures = np.array([a.law.max_temperature for a in self.heated], float)
@@ -276,6 +353,30 @@ class Plan:
             raise ScenarioError("plan --path: the times must increase from row to row")
         return np.column_stack([np.interp(times, path_times, positions[:, j]) for j in range(3)])
 
+    def _point(self, point):
+        """``(name, module index)`` of the point aimed: 'tip' or a module (its end)."""
+        from ..scenario.sources import did_you_mean
+        names = [module.name for module in self.sim.robot.modules]
+        if point in (None, "tip"):
+            return "tip", self.sim.robot.tip_index
+        if point not in names:
+            raise ScenarioError(f"--point {point!r} is not 'tip' or a module" + did_you_mean(point, names))
+        return point, names.index(point)
+
+    def _direction(self, direction):
+        """The unit target direction (3,), or None."""
+        if direction is None:
+            return None
+        if self.objective == "track":
+            raise ScenarioError("plan --objective track follows positions; a --target-direction is for time and energy")
+        from ..studies.targets import Target
+        return Target.create(np.zeros(3), direction).direction
+
+    @staticmethod
+    def _key_of(path):
+        """The TCA key of a varied drive path (``MODULE.TCA.drive.value`` -> ``MODULE.TCA``)."""
+        return path.rsplit(".drive.value", 1)[0]
+
     def _varied(self, vary):
         from ..scenario.sources import did_you_mean
         known = {f"{key}.drive.value": key for key in self.keys}
@@ -288,17 +389,25 @@ class Plan:
         return list(dict.fromkeys(vary))
 
     def _bounds(self, bounds):
-        """(k, 2) [W]: given, or 0 to each varied TCA's holding power at ``max_temperature``."""
+        """(k, 2) [W]: the powers of the given bounds (each in its input's unit), or 0 to each
+        varied TCA's holding power at ``max_temperature``."""
+        from ..scenario.schema import DRIVE_UNITS
+        from ..units import to_si
         rows = []
-        for path in self.paths:
-            j = self.keys.index(path.rsplit(".drive.value", 1)[0])
-            hold = self.laws[j].conductance * (self.max_temperatures[j] - self.ambient)
-            rows.append((0.0, hold) if bounds is None else tuple(float(b) for b in bounds))
-        rows = np.array(rows, float)
-        if np.any(rows[:, 0] < 0) or np.any(rows[:, 1] <= rows[:, 0]):
-            raise ScenarioError(f"--bounds {rows[0, 0]:g} {rows[0, 1]:g} W: give 0 <= LO < HI (a power drive's "
-                                "value cannot be negative)")
-        return rows
+        for path, kind, resistance in zip(self.paths, self.kinds, self.resistances):
+            j = self.keys.index(self._key_of(path))
+            if bounds is None:
+                rows.append((0.0, self.laws[j].conductance * (self.max_temperatures[j] - self.ambient)))
+                continue
+            try:
+                values = [float(to_si(b, DRIVE_UNITS[kind])) for b in bounds]
+            except (TypeError, ValueError) as exc:
+                raise ScenarioError(f"--bounds for {path} (a {kind} drive, in {DRIVE_UNIT[kind]}): {exc}") from None
+            if values[0] < 0 or values[1] <= values[0]:
+                raise ScenarioError(f"--bounds {values[0]:g} {values[1]:g} {DRIVE_UNIT[kind]}: give 0 <= LO < HI "
+                                    f"(a {kind} drive's value cannot be negative)")
+            rows.append(tuple(float(power_of(kind, resistance, v)) for v in values))
+        return np.array(rows, float)
 
     def _thermal_matrices(self):
         """``T_k = T_free[k] + M[k] u`` for k = 0..N (u: the inputs, node-major, (N k,)): the
@@ -308,7 +417,7 @@ class Plan:
         Phi, Gamma, _ = self._hold
         E = np.zeros((n, k))
         for i, path in enumerate(self.paths):
-            E[self.keys.index(path.rsplit(".drive.value", 1)[0]), i] = 1.0
+            E[self.keys.index(self._key_of(path)), i] = 1.0
         self._fixed = self.powers0 * (1.0 - E.sum(axis=1))            # the inputs not varied keep their value
         self.fixed_powers = {key: float(p) for key, p in zip(self.keys, self._fixed)
                              if E[self.keys.index(key)].sum() == 0}
@@ -352,15 +461,40 @@ class Plan:
         return solver, [first.raw["w"]] * (self.nodes + 1), [None] * (self.nodes + 1)
 
     def nodes_at(self, u, derivatives=False):
-        """``(tips (N + 1, 3) [m], dtips (N + 1, 3, N k) or None)`` at the inputs ``u``: every
-        node's equilibrium (warm Newton from the last evaluation's, continuation where that
-        fails)."""
+        """``(tips (N + 1, 3) [m], dtips (N + 1, 3, N k) or None)`` at the inputs ``u``: the
+        aimed point's position at every node (:meth:`poses_at`)."""
+        poses, dposes = self.poses_at(u, derivatives)
+        return poses[:, 0:3], None if dposes is None else dposes[:, 0:3]
+
+    def _pose_function(self):
+        """``(w, P) -> (y, dy/dw, dy/dP)``: the aimed point's position and tangent ``y = [p; R
+        e_z]`` (6,) and their derivatives (buffered; patterns to wrap them as sparse matrices)."""
+        if getattr(self, "_pose", None) is None:
+            import casadi as ca
+
+            from ..model.rotations import rotation_matrix
+            from ..solvers.newton import BufferedFunction, CscPattern
+            nlp = self._equilibria[0].nlp
+            w, P = ca.SX.sym("w", nlp.w.numel()), ca.SX.sym("P", nlp.P.numel())
+            ends = nlp.outputs.expand()(w, P)[1]
+            m = self.point_index
+            y = ca.vertcat(ends[0:3, m], rotation_matrix(ends[3:7, m])[:, 2])
+            function = ca.Function("pose", [w, P], [y, ca.jacobian(y, w), ca.jacobian(y, P)])
+            self._pose = (BufferedFunction(function), [CscPattern(function.sparsity_out(k)) for k in (1, 2)])
+        return self._pose
+
+    def poses_at(self, u, derivatives=False):
+        """``(poses (N + 1, 6), dposes (N + 1, 6, N k) or None)`` at the inputs ``u``: the aimed
+        point's position [m] and tangent at every node's equilibrium (warm Newton from the last
+        evaluation's, continuation where that fails) and their derivatives by the implicit
+        function theorem."""
         if self._equilibria is None:
             self._equilibria = self._start()
         solver, ws, lus = self._equilibria
+        pose, patterns = self._pose_function()
         T = self.temperatures(u)
-        tips = np.zeros((self.nodes + 1, 3))
-        dtips = np.zeros((self.nodes + 1, 3, self.M.shape[2])) if derivatives else None
+        tips = np.zeros((self.nodes + 1, 6))
+        dtips = np.zeros((self.nodes + 1, 6, self.M.shape[2])) if derivatives else None
         selector = np.zeros((self.sim.params.size, len(self.keys)))
         selector[self.temperature_index, np.arange(len(self.keys))] = 1.0
         tolerance = self.sim.scenario.solver.tolerance
@@ -374,11 +508,13 @@ class Plan:
                     raise _NoEquilibrium(k, self.step * k, solution.message)
                 w = solution.raw["w"]
             ws[k], lus[k] = w, solver.square.last_lu
-            tips[k] = solver._outputs_at(w, params)[1][0:3, self.sim.robot.tip_index]
+            y, y_w, y_P = pose(w, params)
+            tips[k] = y
             if derivatives:
                 linear = solver.linearise(w, params)
                 lus[k] = linear.lu
-                dtips[k] = linear.tip_derivative(selector) @ self.M[k]
+                by_w, by_P = (pattern.matrix(values) for pattern, values in zip(patterns, (y_w, y_P)))
+                dtips[k] = (by_w @ linear.state_derivative(selector) + by_P @ selector) @ self.M[k]
         return tips, dtips
 
     # ------------------------------------------------------------------ objectives
@@ -408,13 +544,14 @@ class Plan:
         that is the minimum-time plan itself, so least squares starts next to its answer."""
         from ..studies.inverse import InverseStatics
         from ..studies.targets import Target
-        varied = [self.keys.index(path.rsplit(".drive.value", 1)[0]) for path in self.paths]
+        varied = [self.keys.index(self._key_of(path)) for path in self.paths]
         conductance = np.array([self.laws[j].conductance for j in varied])
         low = float(np.max(self.ambient + self.bounds[:, 0] / conductance))
         high = float(np.min(self.ambient + self.bounds[:, 1] / conductance))
         inverse = InverseStatics(self.sim, vary=[f"{self.keys[j]}.temperature" for j in varied],
-                                 bounds=(low, max(high, low + 1e-3)), tolerance=self.tolerance)
-        answer = inverse.solve(Target.create(self.targets[-1]))
+                                 bounds=(low, max(high, low + 1e-3)), tolerance=self.tolerance,
+                                 angle_tolerance=self.angle_tolerance)
+        answer = inverse.solve(Target.create(self.targets[-1], self.direction, point=self.point))
         hold = np.array([answer.temperatures[f"{self.keys[j]}.temperature"] for j in varied])
         inputs = np.empty((self.nodes, len(varied)))
         for i, j in enumerate(varied):
@@ -450,20 +587,22 @@ class Plan:
                 cache.clear()
                 u = lo + span * x
                 self._last_u = u
-                cache[key] = (u, *self.nodes_at(u, derivatives=derivatives))
+                cache[key] = (u, *self.poses_at(u, derivatives=derivatives))
             return cache[key]
 
+        goal, scale = self._goal()
+
         def residuals(x):
-            u, tips, _ = evaluate(x)
+            u, poses, _ = evaluate(x)
             over = np.maximum(self.temperatures(u).ravel() - T_max, 0.0) / TEMPERATURE_SLACK
-            return np.concatenate([((tips - self.targets) / self.tolerance).ravel(), weight * x, over])
+            return np.concatenate([((poses[:, :goal.shape[1]] - goal) / scale).ravel(), weight * x, over])
 
         def jacobian(x):
-            u, _, dtips = evaluate(x, derivatives=True)
+            u, _, dposes = evaluate(x, derivatives=True)
             hot = (self.temperatures(u).ravel() - T_max > 0)[:, None]
             dT = self.M.reshape(-1, self.M.shape[2]) * span / TEMPERATURE_SLACK
-            return np.vstack([dtips.reshape(-1, dtips.shape[2]) * span / self.tolerance,
-                              weight * np.eye(x.size), np.where(hot, dT, 0.0)])
+            rates = dposes[:, :goal.shape[1]] / scale[:, None]
+            return np.vstack([rates.reshape(-1, dposes.shape[2]) * span, weight * np.eye(x.size), np.where(hot, dT, 0.0)])
 
         x0 = np.clip(((self.initial_inputs() if start is None else np.asarray(start, float)) - lo) / span, 0.0, 1.0)
         found = least_squares(residuals, x0, jac=jacobian, bounds=(0.0, 1.0), method="trf", xtol=1e-10,
@@ -475,6 +614,15 @@ class Plan:
         status = SolveStatus.judged("least squares (trf)", residual, 1.0, failure, nit=int(found.nfev),
                                     detail=f"least squares: {found.message}")
         return u, status, int(found.nfev)
+
+    def _goal(self):
+        """``(goal (N + 1, 3 or 6), scale (3 or 6,))``: what the aimed point's pose should be at
+        every node (its position; with a direction, its tangent too) and the error that costs 1
+        (the tolerances)."""
+        if self.direction is None:
+            return self.targets, np.full(3, self.tolerance)
+        return (np.hstack([self.targets, np.tile(self.direction, (self.nodes + 1, 1))]),
+                np.r_[np.full(3, self.tolerance), np.full(3, self.angle_tolerance)])
 
     def _least_energy(self, u0):
         """The least electrical energy with the tip within the tolerance from ``by`` on (SLSQP)."""
@@ -493,17 +641,20 @@ class Plan:
                 count[0] += 1
                 u = lo + span * x
                 self._last_u = u
-                cache[key] = self.nodes_at(u, derivatives=True)
+                cache[key] = self.poses_at(u, derivatives=True)
             return cache[key]
 
+        goal, scale = self._goal()
+        box = MARGIN * scale / np.sqrt(3.0)            # per coordinate: the box inside the tolerance's ball
+
         def reach(x):                      # >= 0: each coordinate within the tolerance box from ``by`` on
-            tips, _ = evaluate(x)
-            error = (tips[late] - self.targets[late]).ravel() / (MARGIN * self.tolerance / np.sqrt(3.0))
+            poses, _ = evaluate(x)
+            error = ((poses[late, :goal.shape[1]] - goal[late]) / box).ravel()
             return np.concatenate([1.0 - error, 1.0 + error])
 
         def reach_jacobian(x):
-            _, dtips = evaluate(x)
-            rate = dtips[late].reshape(-1, dtips.shape[2]) / (MARGIN * self.tolerance / np.sqrt(3.0)) * span
+            _, dposes = evaluate(x)
+            rate = (dposes[late, :goal.shape[1]] / box[:, None]).reshape(-1, dposes.shape[2]) * span
             return np.vstack([-rate, rate])
 
         cool = {"type": "ineq", "fun": lambda x: (np.tile(T_max, self.nodes + 1) - (self.T_free.ravel() + M @ (lo + span * x))),
@@ -523,9 +674,15 @@ class Plan:
 
     # ------------------------------------------------------------------ the result
     def _result(self, u, status, evaluations, seconds):
-        tips, _ = self.nodes_at(u) if status.status != Status.NO_EQUILIBRIUM else (np.full((self.nodes + 1, 3), np.nan), None)
+        poses = self.poses_at(u)[0] if status.status != Status.NO_EQUILIBRIUM else np.full((self.nodes + 1, 6), np.nan)
+        tips = poses[:, 0:3]
         errors = np.linalg.norm(tips - self.targets, axis=1)
-        reached = held_from(np.arange(self.nodes + 1) * self.step, errors, self.tolerance)
+        angles = None
+        worst = errors / self.tolerance
+        if self.direction is not None:
+            angles = np.arccos(np.clip(poses[:, 3:6] @ self.direction / np.linalg.norm(poses[:, 3:6], axis=1), -1.0, 1.0))
+            worst = np.maximum(worst, angles / self.angle_tolerance)
+        reached = held_from(np.arange(self.nodes + 1) * self.step, worst, 1.0)
         message = ""
         if self.objective == "energy" and (reached is None or reached > self.by + 1e-9):
             status = status.replace(status=Status.ABOVE_TOLERANCE) if status.success else status
@@ -535,15 +692,20 @@ class Plan:
             message = (f"the tip is not within the tolerance of the path at the horizon's end ({errors[-1] * 1e3:.4g} mm "
                        f"away; RMS distance {np.sqrt(np.mean(errors[1:] ** 2)) * 1e3:.4g} mm)")
         elif reached is None and status.status != Status.NO_EQUILIBRIUM:
+            closest = int(np.argmin(worst))
             message = (f"the target is not reached within the horizon: the closest pose is "
-                       f"{np.min(errors) * 1e3:.4g} mm away (raise --horizon or the --bounds, or move the target)")
+                       f"{errors[closest] * 1e3:.4g} mm away" + ("" if angles is None else
+                                                               f" and {np.degrees(angles[closest]):.3g} deg off the direction")
+                       + " (raise --horizon or the --bounds, or move the target)")
         u = np.asarray(u, float).reshape(self.nodes, len(self.paths))
         energy = float(np.sum(u) * self.step) + self._fixed_energy
         status = status.replace(solve_time_s=seconds, nit=evaluations)
         t = np.arange(self.nodes + 1) * self.step
         return PlanResult(self.objective, t, list(self.paths), u, list(self.keys), self.temperatures(u.ravel()),
                           self.max_temperatures, tips, errors, self.targets, self.tolerance, status, energy, reached,
-                          self.by if self.objective == "energy" else None, message, self.bounds, self.fixed_powers)
+                          self.by if self.objective == "energy" else None, message, self.bounds, self.fixed_powers,
+                          list(self.kinds), list(self.resistances), self.point, self.direction, angles,
+                          self.angle_tolerance if self.direction is not None else None)
 
 
 def held_from(t, errors, tolerance):

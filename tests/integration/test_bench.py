@@ -17,6 +17,16 @@ def test_bench_quick_smoke(tmp_path, capsys):
     # (BDF2 at 2 ms lags by (omega h)^2 / 3 ~ 2e-3; 0.5 s holds under 3 periods: 5.583 Hz measured)
     till = json.loads((tmp_path / "bench.json").read_text())["dynamics"]["till"][0]
     assert abs(till["first_mode_hz"] / till["euler_bernoulli_hz"] - 1) < 0.005, till
+    # where the time goes: the stages (each its own time) and the rest add up to the run, and
+    # every wrapped method is the original again afterwards
+    motion = json.loads((tmp_path / "bench.json").read_text())["dynamics"]
+    for profile, total in ((motion["till_stages"], motion["till_stages"]["run_s"]),
+                           (motion["warm_stages"], motion["warm_stages"]["solve_s"] * motion["warm_stages"]["repeats"])):
+        assert abs(sum(row["s"] for row in profile["stages"].values()) - total) < 1e-9 * max(total, 1.0)
+        assert profile["stages"]["residual evaluations (CasADi)"]["calls"] >= 1
+    assert motion["till_stages"]["stages"]["energy account"]["calls"] == motion["till_stages"]["steps"] + 1
+    from tca_casadi.solvers.newton import SquareSystem
+    assert SquareSystem.residual.__qualname__ == "SquareSystem.residual"
     by_name = {row["problem"]: row for row in rows}
     bending = by_name["bending_module"]
     assert bending["cold_converged"] and bending["sweep_completed"]

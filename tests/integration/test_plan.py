@@ -66,6 +66,84 @@ def test_the_plan_replayed_in_simulate_gives_the_planned_temperatures_and_tips(f
     assert_allclose(series.tip_positions(), fastest.tips, rtol=0, atol=1e-6)
 
 
+VOLTAGE = ["timeline=[]", "bending.tca2.drive={kind: voltage, value: 0}", "tca_types.nylon.resistance=20 ohm"]
+
+
+def test_a_voltage_drive_is_planned_in_volts_and_replays(target, fastest):
+    """The same TCA driven by a voltage through a constant 20 ohm: the same powers as the power
+    plan (the model is linear in P = V^2 / R), the drive values V = sqrt(P R) in the CSV header's
+    unit and the timeline, and the schedule replayed through ``simulate`` gives the planned
+    temperatures to 1e-6 K and tips to 1e-6 m."""
+    plan = Plan(Simulation.from_file(HEATING, VOLTAGE), target, horizon=24.0, nodes=12).solve()
+    assert plan.converged and plan.reached_at_s == fastest.reached_at_s, plan.summary()
+    assert_allclose(plan.inputs, fastest.inputs, rtol=1e-9, atol=1e-12)
+    assert_allclose(plan.drive_values(), np.sqrt(fastest.inputs * 20.0), rtol=1e-9, atol=1e-12)
+    assert plan.header()[1:3] == ["bending.tca2.drive.value [V]", "bending.tca2.power [W]"]
+    assert plan.timeline()["timeline"][0]["set"]["bending.tca2.drive.value"].endswith(" V")
+    series = TimeSimulation(Simulation.from_file(HEATING, VOLTAGE + plan.overrides()), dt=plan.t[1]).run()
+    assert series.completed, series.message
+    column = series.keys.index("bending.tca2")
+    assert_allclose(series.temperatures[:, column], plan.temperatures[:, 0], rtol=0, atol=1e-6)
+    assert_allclose(series.tip_positions(), plan.tips, rtol=0, atol=1e-6)
+
+
+def test_voltage_bounds_are_in_volts_and_a_temperature_dependent_resistance_is_refused(target):
+    sim = Simulation.from_file(HEATING, VOLTAGE)
+    planner = Plan(sim, target, horizon=24.0, nodes=4, bounds=["0 V", "3 V"])
+    assert_allclose(planner.bounds, [[0.0, 9.0 / 20.0]], rtol=1e-12, atol=0)
+    with pytest.raises(Exception, match=r"--bounds for bending.tca2.drive.value \(a voltage drive, in V\): "
+                                        r"'3 W' is not a voltage"):
+        Plan(sim, target, horizon=24.0, nodes=4, bounds=["0", "3 W"])
+    varying = Simulation.from_file(HEATING, VOLTAGE + ["tca_types.nylon.resistance_temperature_coefficient=0.001"])
+    with pytest.raises(Exception, match="resistance that changes with temperature"):
+        Plan(varying, target, horizon=24.0, nodes=4)
+
+
+def test_an_sma_on_a_current_drive_is_planned_in_amperes():
+    """A shape-memory wire heated by a current (``bending_module_sma.yaml``): the plan to the pose
+    that 80 degC gives reaches it, in A, and its schedule replays through ``simulate``."""
+    sma = SCENARIOS / "bending_module_sma.yaml"
+    goal = Simulation.from_file(sma, ["bending.sma1.temperature=80"]).solve(warn=False).tip_position
+    plan = Plan(Simulation.from_file(sma), goal, horizon=30.0, nodes=10).solve()
+    assert plan.converged and plan.reached, plan.summary()
+    assert plan.units == ["A"] and "bending.sma1.drive.value [A]" in plan.header()
+    series = TimeSimulation(Simulation.from_file(sma, plan.overrides()), dt=plan.t[1]).run()
+    assert series.completed, series.message
+    assert_allclose(series.tip_positions(), plan.tips, rtol=0, atol=1e-6)
+
+
+def test_a_target_direction_consistent_with_the_pose_is_reached_with_it(fastest):
+    """The tip's tangent at 60 degC as a target direction besides its position: the same plan
+    (reached at the same node, the same inputs), the angle at the end under 1e-6 rad (the forward
+    solve's own tangent); the vertical instead, which no temperature of TCA 2 gives with that
+    position: not reached, and the message says how far off in angle."""
+    pose = Simulation.from_file(HEATING, [f"bending.tca2.temperature={TARGET_TEMPERATURE}"]).solve(warn=False)
+    tangent = pose.modules[-1].R[:, 2, -1]
+    plan = Plan(Simulation.from_file(HEATING), pose.tip_position, horizon=24.0, nodes=12, direction=tangent).solve()
+    assert plan.converged and plan.reached_at_s == fastest.reached_at_s, plan.summary()
+    assert_allclose(plan.inputs, fastest.inputs, rtol=1e-6, atol=0)
+    assert plan.angle_errors[-1] < 1e-6 and plan.header()[-1] == "angle_error [rad]"
+    assert np.all(plan.angle_errors[plan.t >= plan.reached_at_s] <= np.radians(1.0))
+    off = Plan(Simulation.from_file(HEATING), pose.tip_position, horizon=24.0, nodes=12, direction=[0, 0, -1]).solve()
+    assert not off.reached and "deg off the direction" in off.message, off.summary()
+
+
+def test_a_module_s_end_as_the_point_on_the_arm():
+    """``point='bending'`` on the arm (its bending module's TCAs by power): the plan brings that
+    module's end, not the tip, to where TCA 2 at 60 degC puts it; a forward solve at the plan's
+    last temperatures puts the module's end where the plan says, to 1e-9 m."""
+    drives = [f"bending.tca{k}.drive={{kind: power, value: 0}}" for k in (1, 2, 3)] + \
+             [f"bending.tca{k}.temperature=25" for k in (1, 2, 3)]
+    arm = SCENARIOS / "arm.yaml"
+    goal = Simulation.from_file(arm, drives + ["bending.tca2.temperature=60"]).solve(warn=False).modules[0].p[:, -1]
+    plan = Plan(Simulation.from_file(arm, drives), goal, horizon=24.0, nodes=6, point="bending").solve()
+    assert plan.converged and plan.reached, plan.summary()
+    final = Simulation.from_file(arm, drives + [f"{key}.temperature={float(T)!r}" for key, T in
+                                                zip(plan.keys, plan.temperatures[-1])]).solve(warn=False)
+    assert_allclose(final.modules[0].p[:, -1], plan.tips[-1], rtol=0, atol=1e-9)
+    assert np.linalg.norm(final.tip_position - plan.tips[-1]) > 0.01          # the tip is elsewhere
+
+
 def test_least_energy_uses_less_than_the_fastest_plan_and_a_constant_input(target, fastest):
     """Held from 16 s on: less electrical energy than the minimum-time plan over the horizon, and
     up to 16 s less than the constant input that brings the TCA to the same temperature at 16 s,
@@ -117,6 +195,10 @@ def test_an_unreachable_target_says_how_close_and_writes_its_files(tmp_path, cap
     (["--bounds", "0.5", "0.1"], "--bounds 0.5 0.1 W: give 0 <= LO < HI"),
     (["--objective", "energy", "--by", "40"], "--by 40 s is outside the horizon (0 to 30 s)"),
     (["--horizon", "-1"], "--horizon must be positive"),
+    (["--point", "bendng"], "--point 'bendng' is not 'tip' or a module (did you mean 'bending'?)"),
+    (["--target-direction", "0", "0", "0"], "target direction must not be zero"),
+    (["--target-direction", "0", "0", "1", "--angle-tolerance", "0"], "--angle-tolerance must be positive"),
+    (["--bounds", "0", "3 V"], "--bounds for bending.tca2.drive.value (a power drive, in W): '3 V' is not a power"),
 ])
 def test_bad_plan_input_is_one_line(arguments, message, tmp_path, capsys):
     assert main(["plan", str(HEATING), "--target-position", "0", "0", "-0.04", *arguments,
