@@ -7,6 +7,7 @@ when some samples did not converge (they are rows with their reason); ``fit``: 1
 squares did not converge.
 """
 import argparse
+import math
 import json
 import logging
 import signal
@@ -165,6 +166,8 @@ def build_parser():
     plan.add_argument("--tolerance", default=None, metavar="M",
                       help="distance from the target within which it counts as reached (default 0.1 mm)")
     _output_arguments(plan, "plan", "plan.png")
+    plan.add_argument("--animation", action="store_true",
+                      help="also plan.gif (and plan.mp4 with ffmpeg): the robot at every node, with a clock")
 
     study = commands.add_parser("study", help="solve many samples (workspace maps, Monte Carlo, design sweeps) "
                                 "serially, on local processes or a Dask cluster; study.parquet, study.csv, plots")
@@ -637,10 +640,20 @@ def _plan(args):
         options["angle_tolerance"] = _quantities([args.angle_tolerance], "angle", "--angle-tolerance")[0]
     planner = Plan(sim, target, objective=args.objective, nodes=args.nodes, vary=args.vary, point=args.point,
                    direction=args.target_direction, **options)
-    with _results(args, sim, "plan", ["plan.csv", "plan.json", "plan_timeline.yaml", "plan.png"],
-                  stale=["plan.png"] if args.no_plot else [], default="plan") as run:
+    movies = ["plan.gif", "plan.mp4"]
+    with _results(args, sim, "plan", ["plan.csv", "plan.json", "plan_timeline.yaml", "plan.png"] + movies,
+                  stale=(["plan.png"] if args.no_plot else []) + ([] if args.animation else movies),
+                  default="plan") as run:
         result = _with_progress(planner.solve, "plan", quiet=args.quiet)
         written = result.save(run.staging, plot=not args.no_plot)
+        if args.animation and all(map(math.isfinite, result.tips.ravel())):      # no equilibrium: nothing to draw
+            from .plotting.animation import save_plan_animation
+            paths, speed_up = _with_progress(
+                lambda progress: save_plan_animation(result, planner.solutions(result), run.staging, max_frames=60,
+                                                     progress=progress),
+                "animation", quiet=args.quiet)
+            written += paths
+            print(f"animation at {'real time' if speed_up == 1 else f'{speed_up}x real time'}")
     print(result.summary())
     print("wrote " + ", ".join(str(p) for p in run.final(written)))
     return 0 if result.converged and result.reached else 1

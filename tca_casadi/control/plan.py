@@ -517,6 +517,21 @@ class Plan:
                 dtips[k] = (by_w @ linear.state_derivative(selector) + by_P @ selector) @ self.M[k]
         return tips, dtips
 
+    def solutions(self, plan):
+        """One :class:`~tca_casadi.solution.Solution` per node of ``plan`` (this planner's
+        result): the robot's equilibrium at the node's planned temperatures (Newton from the
+        node's last equilibrium; the frames of ``plan --animation``)."""
+        out = []
+        for k, temperatures in enumerate(plan.temperatures):
+            params = self.sim.params.copy()
+            params[self.temperature_index] = temperatures
+            start = self._equilibria[1][k] if self._equilibria is not None else None
+            solution = (self.sim.solver().solve_newton(params, start) if start is not None else None)
+            if solution is None or not solution.converged:
+                solution = self.sim.solve_at(params)
+            out.append(solution)
+        return out
+
     # ------------------------------------------------------------------ objectives
     def solve(self, progress=None, start=None):
         """The plan (:class:`PlanResult`); ``progress(fraction, text)`` after each phase;

@@ -101,16 +101,39 @@ def save_time_animation(series, directory, fps=10, max_frames=150, progress=None
     real time or the smallest speed-up of :data:`SPEED_UPS` that fits ``max_frames`` frames,
     with a clock and the temperatures of the heated TCAs that are warm (0.5 K above the run's
     lowest temperature). Returns ``(paths, speed_up)``."""
-    directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
     n = len(series.solutions)
-    t = series.t[:n]
+    heated = [j for j in range(len(series.keys)) if not np.all(np.isnan(series.powers[:n, j]))]
+    return animate_in_time(series.t[:n], series.solutions, series.keys, series.temperatures[:n], heated,
+                           Path(directory) / "simulate", fps=fps, max_frames=max_frames, progress=progress,
+                           objects=series.objects)
+
+
+def save_plan_animation(plan, solutions, directory, fps=10, max_frames=150, progress=None):
+    """``plan.gif`` (and ``plan.mp4`` with ffmpeg) of a :class:`~tca_casadi.control.plan.PlanResult`:
+    the robot at every node's equilibrium (``solutions``, one per node) as
+    :func:`save_time_animation` draws a run, with the target marked. Returns ``(paths, speed_up)``."""
+    marks = [(plan.target, "target", "tab:green")]
+    return animate_in_time(plan.t, solutions, plan.keys, plan.temperatures, list(range(len(plan.keys))),
+                           Path(directory) / "plan", fps=fps, max_frames=max_frames, progress=progress, marks=marks)
+
+
+def animate_in_time(t, solutions, keys, temperatures, heated, stem, fps=10, max_frames=150, progress=None,
+                    objects=(), marks=()):
+    """A GIF (and MP4) at ``stem`` of the robot at times ``t`` (n,) [s] (``solutions``, one per
+    time; ``objects``: per time, the object poses), at real time or the smallest speed-up of
+    :data:`SPEED_UPS` that fits ``max_frames`` frames, with a clock and the temperatures
+    (``temperatures`` (n, m) [degC] of ``keys``) of the TCAs ``heated`` (indices) that are warm;
+    ``marks``: ``(position (3,) [m], label, color)`` drawn on every frame. Returns ``(paths,
+    speed_up)``."""
+    stem = Path(stem)
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    t = np.asarray(t, float)
     speed_up = animation_speed_up(t[-1] - t[0], fps, max_frames)
     frames = frame_indices(t, fps, speed_up)
-    heated = [j for j in range(len(series.keys)) if not np.all(np.isnan(series.powers[:n, j]))]
-    ambient = float(np.nanmin(series.temperatures[:n])) if n and series.temperatures.size else 0.0
-    points = [m.p for s in series.solutions for m in s.modules]
-    points += [pose.corners() for poses in series.objects for pose in poses.values()]
+    ambient = float(np.nanmin(temperatures)) if len(t) and np.size(temperatures) else 0.0
+    points = [m.p for s in solutions for m in s.modules]
+    points += [pose.corners() for poses in objects for pose in poses.values()]
+    points += [np.asarray(position, float).reshape(3, 1) for position, _, _ in marks]
     every = np.hstack(points) * 1e3
     limits = every.min(axis=1), every.max(axis=1)
     plt = _pyplot()
@@ -121,18 +144,17 @@ def save_time_animation(series, directory, fps=10, max_frames=150, progress=None
     def draw(frame):
         ax.clear()
         k = frames[frame]
-        warm = [f"{series.keys[j]} {series.temperatures[k, j]:.0f} degC" for j in heated
-                if series.temperatures[k, j] > ambient + 0.5][:6]          # the TCAs that are warm now
-        temperatures = "\n".join("  ".join(warm[i:i + 3]) for i in range(0, len(warm), 3))
-        objects = series.objects[k].values() if series.objects else ()
-        draw_robot(series.solutions[k], ax=ax, objects=objects,
-                   title=f"t = {t[k]:6.1f} s   ({pace})" + (f"\n{temperatures}" if temperatures else ""))
+        warm = [f"{keys[j]} {temperatures[k, j]:.0f} degC" for j in heated
+                if temperatures[k, j] > ambient + 0.5][:6]          # the TCAs that are warm now
+        text = "\n".join("  ".join(warm[i:i + 3]) for i in range(0, len(warm), 3))
+        draw_robot(solutions[k], ax=ax, objects=objects[k].values() if objects else (), extra_points=marks,
+                   title=f"t = {t[k]:6.1f} s   ({pace})" + (f"\n{text}" if text else ""))
         _fix_limits(ax, limits)
         if progress is not None:
             progress((frame + 1) / len(frames), f"frame {frame + 1}/{len(frames)}")
         return []
 
-    paths = _save_movies(fig, draw, len(frames), directory / "simulate", fps)
+    paths = _save_movies(fig, draw, len(frames), stem, fps)
     plt.close(fig)
     return paths, speed_up
 

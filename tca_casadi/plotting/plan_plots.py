@@ -21,7 +21,8 @@ def save_plan_png(plan, path):
     for j, key in enumerate(plan.keys):
         line = axes[1].plot(t, plan.temperatures[:, j], label=key, **line_style(j, n))[0]
         axes[1].axhline(plan.max_temperatures[j], color=line.get_color(), linestyle="--", linewidth=0.8)
-    axes[2].plot(t, plan.errors * 1e3, color="black", label="|tip - target|", **line_style(0, n))
+    axes[2].plot(t, plan.errors * 1e3, color="black", label="|tip - path|" if plan.objective == "track" else
+                 "|tip - target|", **line_style(0, n))
     axes[2].axhline(plan.tolerance * 1e3, color="tab:green", linestyle="--", linewidth=1, label="tolerance")
     if plan.reached:
         for ax in axes:
@@ -30,7 +31,8 @@ def save_plan_png(plan, path):
                          textcoords="offset points", xytext=(6, 8), fontsize=8, color="tab:green")
     if np.all(plan.errors > 0):
         axes[2].set_yscale("log")
-    labels = ["input power [mW]", "temperature [degC]\n(dashed: max)", "distance to target [mm]"]
+    labels = ["input power [mW]", "temperature [degC]\n(dashed: max)",
+              "distance to the path [mm]" if plan.objective == "track" else "distance to target [mm]"]
     for ax, label in zip(axes, labels):
         ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)

@@ -180,6 +180,20 @@ def test_cli_plan_writes_its_files_and_simulate_replays_its_timeline(tmp_path, t
     assert_allclose(replay["bendingtca2temperature_degC"], data["bendingtca2temperature_degC"], rtol=0, atol=1e-6)
 
 
+def test_plan_animation_draws_every_node_s_equilibrium(tmp_path, target, capsys):
+    """``--animation``: plan.gif beside the other files; the frames' robots are the plan's
+    equilibria (each node's solution puts the tip where plan.csv says, to 1e-9 m)."""
+    position = [f"{v * 1e3:.9f} mm" for v in target]
+    assert main(["plan", str(HEATING), "--target-position", *position, "--horizon", "24 s", "--nodes", "4",
+                 "-o", str(tmp_path), "--quiet", "--no-plot", "--animation"]) == 0
+    assert "animation at" in capsys.readouterr().out and (tmp_path / "plan.gif").stat().st_size > 10_000
+    planner = Plan(Simulation.from_file(HEATING), target, horizon=24.0, nodes=4)
+    plan = planner.solve()
+    solutions = planner.solutions(plan)
+    assert len(solutions) == 5 and all(s.converged for s in solutions)
+    assert_allclose([s.tip_position for s in solutions], plan.tips, rtol=0, atol=1e-9)
+
+
 def test_an_unreachable_target_says_how_close_and_writes_its_files(tmp_path, capsys):
     """A target 10 cm away: the plan gets as close as the bounds allow, says how close, exit 1."""
     assert main(["plan", str(HEATING), "--target-position", "0.1", "0", "0", "--horizon", "10", "--nodes", "5",
@@ -332,3 +346,25 @@ def test_a_plant_without_equilibrium_stops_the_loop_and_keeps_what_came_before(m
     assert result.message.startswith("stopped at t = 2 s: the plant has no equilibrium")
     assert result.inputs[-1, 0] > 0                   # the input applied there, not a copy of the one before
     assert "stopped at t = 2 s" in result.summary()
+
+
+def test_the_arm_bends_to_a_pose_then_tracks_a_circle(tmp_path):
+    """``scripts/arm_circle.py --quick`` (docs/control.md's worked example, 10 s steps): the arm
+    bends to the circle's first point by 10 s, and the tracking plan of its three TCAs follows the
+    circle (poses the arm holds statically, slow enough for the TCAs' cooling) from 10 s on to
+    1e-6 m (measured 1e-11 m); the path file it writes reads back as the poses it solved."""
+    import sys
+
+    from conftest import ROOT
+    from tca_casadi.control.plan import read_path
+    sys.path.insert(0, str(ROOT / "scripts"))
+    from arm_circle import main as arm_circle
+    results = arm_circle(["--quick", "-o", str(tmp_path)])
+    bend, track = results["bend"], results["track"]
+    assert bend.converged and bend.reached_at_s <= 10.0, bend.summary()
+    assert track.converged and track.reached_at_s <= 10.0, track.summary()
+    assert np.max(track.errors[track.t >= 10.0]) < 1e-6
+    times, positions = read_path(tmp_path / "circle.csv")
+    assert_allclose(positions[0], bend.target, rtol=0, atol=1e-12)
+    assert np.ptp(positions[:, 0]) > 4e-3 and np.ptp(positions[:, 1]) > 4e-3        # it goes round
+    assert (tmp_path / "track" / "plan.csv").exists()
