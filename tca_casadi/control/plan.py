@@ -510,11 +510,10 @@ class Plan:
             ws[k], lus[k] = w, solver.square.last_lu
             y, y_w, y_P = pose(w, params)
             tips[k] = y
-            if derivatives:
-                linear = solver.linearise(w, params)
-                lus[k] = linear.lu
+            if derivatives and k > 0:             # (node 0's temperatures are measured or given: M_0 = 0)
+                rates, lus[k] = solver.square.state_derivative(w, params, selector)
                 by_w, by_P = (pattern.matrix(values) for pattern, values in zip(patterns, (y_w, y_P)))
-                dtips[k] = (by_w @ linear.state_derivative(selector) + by_P @ selector) @ self.M[k]
+                dtips[k] = (by_w @ rates + by_P @ selector) @ self.M[k]
         return tips, dtips
 
     def solutions(self, plan):

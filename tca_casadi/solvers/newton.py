@@ -223,6 +223,25 @@ class SquareSystem:
         values = [by_parameters(w, P)[1]] + list(tip(w, P))
         return [pattern.matrix(v) for pattern, v in zip(patterns, values)]
 
+    def state_derivative(self, w, P, directions):
+        """``(dw/dlam (n, k), lu)`` for ``P = P0 + lam directions`` at ``(w, P)`` (directions
+        (nP, k)): ``-J_w^-1 (J_P directions)``, with ``J_P directions`` by CasADi's forward mode
+        (k directional derivatives of the residual, about k residuals' cost: no full ``dg/dP``)
+        and ``lu`` the factorised ``J_w`` (for the chord steps of a next solve nearby)."""
+        directions = np.asarray(directions, float).reshape(len(P), -1)
+        k = directions.shape[1]
+        if getattr(self, "_directional", None) is None or self._directional[0] != k:
+            nlp = self.nlp
+            w_sym, P_sym = ca.SX.sym("w", nlp.w.numel()), ca.SX.sym("P", nlp.P.numel())
+            V = ca.SX.sym("V", nlp.P.numel(), k)
+            g = self._residual_function(w_sym, P_sym)
+            self._directional = (k, BufferedFunction(ca.Function("residual_by_P", [w_sym, P_sym, V],
+                                                                 [ca.jtimes(g, P_sym, V)])))
+        rates = self._directional[1](w, P, directions.ravel(order="F"))[0].reshape(-1, k, order="F")
+        _, J = self.evaluate(w, P)
+        lu = self.factorise(J)
+        return -lu.solve(np.ascontiguousarray(rates)), lu
+
     def parameter_jacobian(self, w, P):
         """``dg/dP`` (sparse, (n, nP)) at ``(w, P)``."""
         return self._sensitivities(w, P)[0]

@@ -81,3 +81,23 @@ def test_newton_failure_falls_back_to_ipopt_and_is_reported():
     continued = tip_load(-2e-3, "solver.refine=off").solve()   # continuation (the default), same mesh
     assert continued.converged
     assert_allclose(solution.tip_position, continued.tip_position, rtol=0, atol=1e-9)
+
+
+def test_state_derivative_by_forward_mode_equals_the_full_parameter_jacobian_s():
+    """``SquareSystem.state_derivative`` (``dg/dP`` only along the directions, by CasADi's forward
+    mode; what plans differentiate through) against the linearisation's full sparse ``dg/dP``, for
+    the three TCA temperatures of the bending module at a bent equilibrium: the same ``dw/dT`` to
+    1e-10 of its size, and against central differences of Newton solves to 1e-6 of it."""
+    sim = Simulation.from_file(SCENARIOS / "bending_module.yaml")
+    solution = sim.solve(warn=False)
+    solver, w, params = sim.solver("collocation"), solution.raw["w"], sim.params.copy()
+    selector = np.zeros((params.size, 3))
+    for j, key in enumerate(("bending.tca1", "bending.tca2", "bending.tca3")):
+        selector[sim.robot.layout[f"{key}.temperature"].start, j] = 1.0
+    fast, _ = solver.square.state_derivative(w, params, selector)
+    full = solver.linearise(w, params).state_derivative(selector)
+    size = np.max(np.abs(full))
+    assert_allclose(fast, full, rtol=0, atol=1e-10 * size)
+    step = 1e-3                                              # K
+    ends = [solver.square.newton(w, params + sign * step * selector[:, 1], 1e-12)[0] for sign in (1, -1)]
+    assert_allclose((ends[0] - ends[1]) / (2 * step), full[:, 1], rtol=0, atol=1e-6 * size)
