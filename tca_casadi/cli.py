@@ -165,6 +165,8 @@ def build_parser():
                            "default 0 to the value that holds each TCA at its type's max_temperature)")
     plan.add_argument("--tolerance", default=None, metavar="M",
                       help="distance from the target within which it counts as reached (default 0.1 mm)")
+    plan.add_argument("--power-budget", default=None, metavar="W",
+                      help="the heated TCAs' total power at every step at most this [W] (units allowed, '500 mW')")
     _output_arguments(plan, "plan", "plan.png")
     plan.add_argument("--animation", action="store_true",
                       help="also plan.gif (and plan.mp4 with ffmpeg): the robot at every node, with a clock")
@@ -631,8 +633,9 @@ def _plan(args):
             raise ScenarioError(f"plan --objective {args.objective} needs --target-position X Y Z "
                                 "(a --path is for --objective track)")
         target = _quantities(args.target_position, "length", "--target-position")
-    options = {name: _quantities([getattr(args, name)], kind, f"--{name}")[0]
-               for name, kind in (("horizon", "time"), ("by", "time"), ("tolerance", "length"))
+    options = {name: _quantities([getattr(args, name)], kind, f"--{name.replace('_', '-')}")[0]
+               for name, kind in (("horizon", "time"), ("by", "time"), ("tolerance", "length"),
+                                  ("power_budget", "power"))
                if getattr(args, name) is not None}
     if args.bounds is not None:
         options["bounds"] = list(args.bounds)             # each in its drive's unit (Plan converts)

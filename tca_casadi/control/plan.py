@@ -56,6 +56,8 @@ def value_of(kind, resistance, power):
     return {"power": power, "voltage": np.sqrt(power * resistance), "current": np.sqrt(power / resistance)}[kind]
 #: temperatures may exceed ``max_temperature`` by at most this much [K] in a converged plan
 TEMPERATURE_SLACK = 1e-3
+#: the total power may exceed ``--power-budget`` by at most this much [W] in a converged plan
+POWER_SLACK = 1e-6
 #: weight of the least-heating term that picks one plan where several reach the target equally
 REGULARISATION = 1e-6
 OBJECTIVES = ("time", "energy", "track")
@@ -105,6 +107,13 @@ class PlanResult(HeatingRecord):
     direction: np.ndarray = None
     angle_errors: np.ndarray = None
     angle_tolerance: float = None
+    #: the limit [W] of the heated TCAs' total power at every step (None: no budget)
+    power_budget: float = None
+
+    @property
+    def total_powers(self):
+        """(N,) [W]: every heated TCA's power summed at each step (the fixed ones included)."""
+        return np.sum(self.inputs, axis=1) + sum(self.fixed_powers.values())
 
     def drive_values(self):
         """(N, k): the planned inputs in their drives' units (W, V or A)."""
@@ -178,6 +187,8 @@ class PlanResult(HeatingRecord):
         for j, key in enumerate(self.keys):
             lines.append(f"  {key + '.temperature':<28} peak {np.max(self.temperatures[:, j]):.2f} degC "
                          f"(max {self.max_temperatures[j]:g})")
+        if self.power_budget is not None:
+            lines.append(f"  {'total power':<28} peak {np.max(self.total_powers):.4g} W (budget {self.power_budget:.4g} W)")
         if self.message:
             lines.append(f"  {self.message}")
         return "\n".join(lines)
@@ -221,7 +232,8 @@ class PlanResult(HeatingRecord):
                 "peak_temperatures_degC": dict(zip(self.keys, np.max(self.temperatures, axis=0).tolist())),
                 "max_temperatures_degC": dict(zip(self.keys, self.max_temperatures.tolist())),
                 "final_error_m": float(self.errors[-1]), "status": self.result.as_dict(), "message": self.message,
-                "point": self.point,
+                "point": self.point, "power_budget_W": self.power_budget,
+                "peak_total_power_W": float(np.max(self.total_powers)),
                 "target_direction": None if self.direction is None else self.direction.tolist(),
                 "angle_tolerance_rad": self.angle_tolerance,
                 "final_angle_error_rad": None if self.angle_errors is None else float(self.angle_errors[-1]),
@@ -282,11 +294,14 @@ class Plan:
     direction : array_like (3,), optional
         Also aim the point's tangent ``R e_z`` along this direction (``time`` and ``energy``),
         reached within ``angle_tolerance`` [rad].
+    power_budget : float, optional
+        [W]: the heated TCAs' total electrical power at every step stays at or below it (the
+        inputs not varied included).
     """
 
     def __init__(self, sim, target, objective="time", horizon=10.0, nodes=60, vary=None, bounds=None,
                  tolerance=1e-4, by=None, initial_temperatures=None, point="tip", direction=None,
-                 angle_tolerance=np.radians(1.0)):
+                 angle_tolerance=np.radians(1.0), power_budget=None):
         from ..studies.timeline import TimeSimulation
         if objective not in OBJECTIVES:
             raise ScenarioError(f"--objective {objective!r}: one of {', '.join(OBJECTIVES)}")
@@ -337,6 +352,7 @@ class Plan:
         self.max_temperatures = np.array([a.law.max_temperature for a in self.heated], float)
         self.bounds = self._bounds(bounds)
         self._thermal_matrices()
+        self.power_budget = self._budget(power_budget)
         self.temperature_index = [sim.robot.layout[a.parameter].start for a in self.heated]
         self._equilibria = None
 
@@ -408,6 +424,30 @@ class Plan:
                                     f"(a {kind} drive's value cannot be negative)")
             rows.append(tuple(float(power_of(kind, resistance, v)) for v in values))
         return np.array(rows, float)
+
+    def _budget(self, budget):
+        """The power budget [W] (None: none), checked against the inputs that are not varied, and
+        each input's upper bound lowered to it (no single input may exceed it)."""
+        if budget is None:
+            return None
+        budget, fixed = float(budget), float(np.sum(self._fixed))
+        if not budget > 0 or not np.isfinite(budget):
+            raise ScenarioError(f"--power-budget must be positive (got {budget:g} W)")
+        if budget - fixed < self.bounds[:, 0].sum():
+            raise ScenarioError(f"--power-budget {budget:g} W: the inputs that are not varied draw {fixed:g} W and the "
+                                f"varied ones at least {self.bounds[:, 0].sum():g} W")
+        self.bounds[:, 1] = np.minimum(self.bounds[:, 1], budget - fixed)
+        if np.any(self.bounds[:, 1] <= self.bounds[:, 0]):
+            raise ScenarioError(f"--power-budget {budget:g} W leaves an input no range above its lower bound")
+        return budget
+
+    def _budget_rows(self):
+        """``(S (N, N k), headroom (N,))``: each step's sum of the varied inputs, and what the
+        budget leaves them (inf without one)."""
+        k = len(self.paths)
+        S = np.kron(np.eye(self.nodes), np.ones((1, k)))
+        room = np.inf if self.power_budget is None else self.power_budget - float(np.sum(self._fixed))
+        return S, np.full(self.nodes, room)
 
     def _thermal_matrices(self):
         """``T_k = T_free[k] + M[k] u`` for k = 0..N (u: the inputs, node-major, (N k,)): the
@@ -605,29 +645,41 @@ class Plan:
             return cache[key]
 
         goal, scale = self._goal()
+        S, room = self._budget_rows()
 
         def residuals(x):
             u, poses, _ = evaluate(x)
             over = np.maximum(self.temperatures(u).ravel() - T_max, 0.0) / TEMPERATURE_SLACK
-            return np.concatenate([((poses[:, :goal.shape[1]] - goal) / scale).ravel(), weight * x, over])
+            spent = np.maximum(S @ u - room, 0.0) / POWER_SLACK
+            return np.concatenate([((poses[:, :goal.shape[1]] - goal) / scale).ravel(), weight * x, over, spent])
 
         def jacobian(x):
             u, _, dposes = evaluate(x, derivatives=True)
             hot = (self.temperatures(u).ravel() - T_max > 0)[:, None]
             dT = self.M.reshape(-1, self.M.shape[2]) * span / TEMPERATURE_SLACK
             rates = dposes[:, :goal.shape[1]] / scale[:, None]
-            return np.vstack([rates.reshape(-1, dposes.shape[2]) * span, weight * np.eye(x.size), np.where(hot, dT, 0.0)])
+            spending = np.where((S @ u - room > 0)[:, None], S * span / POWER_SLACK, 0.0)
+            return np.vstack([rates.reshape(-1, dposes.shape[2]) * span, weight * np.eye(x.size), np.where(hot, dT, 0.0),
+                              spending])
 
         x0 = np.clip(((self.initial_inputs() if start is None else np.asarray(start, float)) - lo) / span, 0.0, 1.0)
         found = least_squares(residuals, x0, jac=jacobian, bounds=(0.0, 1.0), method="trf", xtol=1e-10,
                               ftol=1e-12, gtol=1e-10, max_nfev=200)
         u = lo + span * found.x
         failure = None if found.status > 0 else Status.MAX_ITERATIONS if found.status == 0 else Status.ALGORITHM_FAILED
-        over = float(np.max(self.temperatures(u) - self.max_temperatures))
-        residual = max(over, 0.0) / TEMPERATURE_SLACK
+        residual = self._limit_violation(u)
         status = SolveStatus.judged("least squares (trf)", residual, 1.0, failure, nit=int(found.nfev),
                                     detail=f"least squares: {found.message}")
         return u, status, int(found.nfev)
+
+    def _limit_violation(self, u):
+        """How far ``u`` passes the limits, in their slacks (<= 1: within): the temperatures above
+        ``max_temperature`` over :data:`TEMPERATURE_SLACK`, the total power above the budget over
+        :data:`POWER_SLACK`."""
+        S, room = self._budget_rows()
+        hot = float(np.max(self.temperatures(u) - self.max_temperatures)) / TEMPERATURE_SLACK
+        spent = float(np.max(S @ u - room)) / POWER_SLACK if S.size else 0.0
+        return max(hot, spent, 0.0)
 
     def _goal(self):
         """``(goal (N + 1, 3 or 6), scale (3 or 6,))``: what the aimed point's pose should be at
@@ -673,16 +725,20 @@ class Plan:
 
         cool = {"type": "ineq", "fun": lambda x: (np.tile(T_max, self.nodes + 1) - (self.T_free.ravel() + M @ (lo + span * x))),
                 "jac": lambda x: -M * span}
+        S, room = self._budget_rows()
+        limits = [cool] if self.power_budget is None else [
+            cool, {"type": "ineq", "fun": lambda x: room - S @ (lo + span * x), "jac": lambda x: -S * span}]
         energy = self.step * span / np.sum(span)                       # scaled: the energy per full range
         found = minimize(lambda x: float(energy @ x), (u0 - lo) / span, jac=lambda x: energy, method="SLSQP",
                          bounds=[(0.0, 1.0)] * lo.size,
-                         constraints=[{"type": "ineq", "fun": reach, "jac": reach_jacobian}, cool],
+                         constraints=[{"type": "ineq", "fun": reach, "jac": reach_jacobian}] + limits,
                          options={"maxiter": 200, "ftol": 1e-9})
         x = np.clip(found.x, 0.0, 1.0)
         u = lo + span * x
-        violation = max(float(-np.min(reach(x))), 0.0)
+        # in units of what is allowed: 1e-6 of the reach box, the limits' slacks (<= 1: within)
+        violation = max(float(-np.min(reach(x))) / 1e-6, self._limit_violation(u), 0.0)
         failure = None if found.success else Status.ALGORITHM_FAILED
-        status = SolveStatus.judged("SLSQP", violation, 1e-6, failure, nit=int(found.nit),
+        status = SolveStatus.judged("SLSQP", violation, 1.0, failure, nit=int(found.nit),
                                     detail=f"SLSQP: {found.message}")
         return u, status, count[0]
 
@@ -719,7 +775,7 @@ class Plan:
                           self.max_temperatures, tips, errors, self.targets, self.tolerance, status, energy, reached,
                           self.by if self.objective == "energy" else None, message, self.bounds, self.fixed_powers,
                           list(self.kinds), list(self.resistances), self.point, self.direction, angles,
-                          self.angle_tolerance if self.direction is not None else None)
+                          self.angle_tolerance if self.direction is not None else None, self.power_budget)
 
 
 def held_from(t, errors, tolerance):

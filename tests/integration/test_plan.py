@@ -54,6 +54,37 @@ def test_minimum_time_is_bang_bang_and_follows_the_closed_form(fastest):
     assert np.all(plan.errors[plan.t >= plan.reached_at_s] <= plan.tolerance)
 
 
+def test_a_power_budget_below_full_power_is_the_bang_bang_of_the_budget(target, fastest):
+    """A 0.6 W budget on the one heated TCA (full power 0.884 W): the same closed form with
+    P_max = 0.6 W (t* = 10.8 s instead of 6.4 s), the budget held to the slack while heating, and
+    the total power never above it; one line for a budget below what the fixed inputs draw."""
+    plan = Plan(Simulation.from_file(HEATING), target, objective="time", horizon=24.0, nodes=24,
+                power_budget=0.6).solve()
+    assert plan.converged and plan.reached, plan.summary()
+    law = Plan(Simulation.from_file(HEATING), target, horizon=24.0, nodes=24).laws[0]
+    C, G = law.heat_capacity, law.conductance
+    t_star = (C / G) * np.log((0.6 / G) / (0.6 / G - (TARGET_TEMPERATURE - 25.0)))
+    assert t_star <= plan.reached_at_s <= t_star + plan.t[1] and plan.reached_at_s > fastest.reached_at_s
+    full = plan.t[:-1] + plan.t[1] <= t_star
+    assert_allclose(plan.inputs[full, 0], 0.6, rtol=0, atol=1e-6)
+    assert np.max(plan.total_powers) <= 0.6 + 1e-6 and plan.to_dict()["power_budget_W"] == 0.6
+
+
+def test_a_power_budget_shared_by_three_tcas_on_the_arm():
+    """The arm's bending module (three TCAs by power) to where TCA 1 at 65 degC and the others at
+    42.5 degC put the tip: its fastest plan draws up to 2.65 W at once; with a 1.2 W budget the
+    total stays within it (to 1e-6 W) at every step and the target is reached later."""
+    drives = [f"bending.tca{k}.drive={{kind: power, value: 0}}" for k in (1, 2, 3)]
+    arm = SCENARIOS / "arm.yaml"
+    goal = Simulation.from_file(arm, drives + ["bending.tca1.temperature=65", "bending.tca2.temperature=42.5",
+                                               "bending.tca3.temperature=42.5"]).solve(warn=False).tip_position
+    free = Plan(Simulation.from_file(arm, drives), goal, horizon=30.0, nodes=10).solve()
+    held = Plan(Simulation.from_file(arm, drives), goal, horizon=30.0, nodes=10, power_budget=1.2).solve()
+    assert free.reached and np.max(free.total_powers) > 2.0, free.summary()
+    assert held.converged and held.reached, held.summary()
+    assert np.max(held.total_powers) <= 1.2 + 1e-6 and held.reached_at_s > free.reached_at_s
+
+
 def test_the_plan_replayed_in_simulate_gives_the_planned_temperatures_and_tips(fastest):
     """The schedule (``PlanResult.overrides``, what ``plan_timeline.yaml`` holds) run through the
     quasi-static ``simulate`` at the plan's step: the same temperatures to 1e-6 K and the same tip
@@ -213,6 +244,8 @@ def test_an_unreachable_target_says_how_close_and_writes_its_files(tmp_path, cap
     (["--target-direction", "0", "0", "0"], "target direction must not be zero"),
     (["--target-direction", "0", "0", "1", "--angle-tolerance", "0"], "--angle-tolerance must be positive"),
     (["--bounds", "0", "3 V"], "--bounds for bending.tca2.drive.value (a power drive, in W): '3 V' is not a power"),
+    (["--power-budget", "0 W"], "--power-budget must be positive (got 0 W)"),
+    (["--power-budget", "2 V"], "--power-budget: '2 V' is not a power"),
 ])
 def test_bad_plan_input_is_one_line(arguments, message, tmp_path, capsys):
     assert main(["plan", str(HEATING), "--target-position", "0", "0", "-0.04", *arguments,
