@@ -23,11 +23,12 @@ model the scenario as given; both with the mpc drives as power drives.
 """
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from ..errors import ScenarioError, SolverError
-from .plan import HeatingRecord, Plan, _NoEquilibrium, held_from
+from .plan import HeatingRecord, Plan, _NoEquilibrium, held_from, read_path
 
 #: the tip error is integrated only within this many tolerances of the target (anti-windup)
 INTEGRATION_WINDOW = 3.0
@@ -48,6 +49,10 @@ class ClosedLoopResult(HeatingRecord):
     settings: dict
     plant_overrides: list
     message: str = ""
+    #: (n, 3) [m]: where the tip should be at each period time (the target, or the path there)
+    targets: np.ndarray = None
+    #: the followed path's CSV file (None: a fixed target)
+    path: str = None
 
     @property
     def reached_at_s(self):
@@ -70,7 +75,8 @@ class ClosedLoopResult(HeatingRecord):
     def header(self):
         return (["t [s]"] + [f"{p} [W]" for p in self.paths] + [f"{k}.temperature [degC]" for k in self.keys]
                 + ["tip_x [m]", "tip_y [m]", "tip_z [m]", "tip_error [m]", "offset_x [m]", "offset_y [m]",
-                   "offset_z [m]", "controller_solve_time [s]", "converged"])
+                   "offset_z [m]", "controller_solve_time [s]", "converged"]
+                + ([] if self.path is None else ["target_x [m]", "target_y [m]", "target_z [m]"]))
 
     def rows(self):
         out = []
@@ -79,14 +85,17 @@ class ClosedLoopResult(HeatingRecord):
             out.append([f"{t:.12g}"] + [f"{v:.10g}" for v in self.inputs[k]]
                        + [f"{v:.10g}" for v in self.temperatures[k]] + [f"{v:.10g}" for v in self.tips[k]]
                        + [f"{self.errors[k]:.10g}"] + [f"{v:.10g}" for v in self.offsets[k]]
-                       + [solve, int(self.plans_converged[k])])
+                       + [solve, int(self.plans_converged[k])]
+                       + ([] if self.path is None else [f"{v:.10g}" for v in self.targets[k]]))
         return out
 
     def report(self):
         times = self.solve_times[~np.isnan(self.solve_times)]
         return {"controller": "mpc", "completed": self.completed, "reached": self.reached,
                 "reached_at_s": self.reached_at_s, "final_error_m": float(self.errors[-1]),
-                "target_m": self.target.tolist(), "tolerance_m": self.tolerance, "energy_J": self.energy_J,
+                "target_m": self.target.tolist(), "path": self.path, "tolerance_m": self.tolerance,
+                "rms_error_m": float(np.sqrt(np.mean(self.errors[1:] ** 2))) if len(self.errors) > 1 else 0.0,
+                "energy_J": self.energy_J,
                 "settings": self.settings, "plant_overrides": self.plant_overrides,
                 "solve_time_median_s": float(np.median(times)) if times.size else None,
                 "solve_time_max_s": float(np.max(times)) if times.size else None,
@@ -97,10 +106,15 @@ class ClosedLoopResult(HeatingRecord):
 
     def summary(self):
         report = self.report()
-        state = (f"held within {self.tolerance * 1e3:.4g} mm from {self.reached_at_s:.4g} s" if self.reached else
-                 f"NOT within {self.tolerance * 1e3:.4g} mm at the end ({self.errors[-1] * 1e3:.4g} mm away)")
+        what = "the path" if self.path is not None else ""
+        state = (f"held within {self.tolerance * 1e3:.4g} mm{' of ' + what if what else ''} from "
+                 f"{self.reached_at_s:.4g} s" if self.reached else
+                 f"NOT within {self.tolerance * 1e3:.4g} mm{' of ' + what if what else ''} at the end "
+                 f"({self.errors[-1] * 1e3:.4g} mm away)")
         lines = [f"closed loop (mpc): {state}; {report['plans_converged']} of {report['periods']} plans converged",
-                 "  target [mm]: " + " ".join(f"{v * 1e3:+.4f}" for v in self.target)
+                 ("  target [mm]: " if self.path is None else
+                  f"  path {Path(self.path).name} (RMS distance {report['rms_error_m'] * 1e3:.4g} mm), to [mm]: ")
+                 + " ".join(f"{v * 1e3:+.4f}" for v in self.target)
                  + f"; tip at the end [mm]: " + " ".join(f"{v * 1e3:+.4f}" for v in self.tips[-1]),
                  f"  controller solve time per period: median {report['solve_time_median_s'] * 1e3:.0f} ms, "
                  f"max {report['solve_time_max_s'] * 1e3:.0f} ms ({report['solve_time_fraction_of_period']:.0%} of the "
@@ -162,7 +176,8 @@ class ClosedLoop:
         for override in self.plant_overrides:
             self._check_changes(source, list(overrides) + as_power, override, allow_code)
         self.paths = [f"{key}.drive.value" for key, _ in drives]
-        self.target = np.asarray(settings.target, float)
+        self.path = None if settings.path is None else read_path(settings.path, f"{drives[0][0]}.drive.mpc.path")
+        self.target = np.asarray(settings.target if self.path is None else self.path[1][-1], float)
         bounds = [d.max_power for _, d in drives]
         self.bounds = None if all(b is None for b in bounds) else (0.0, min(b for b in bounds if b is not None))
         self.periods = int(np.floor(self.duration / settings.period + 1e-9))
@@ -170,8 +185,9 @@ class ClosedLoop:
             raise ScenarioError(f"the duration ({self.duration:g} s) is shorter than the mpc period "
                                 f"({settings.period:g} s)")
         steps = max(1, int(round(settings.horizon / settings.period)))
-        self.controller = Plan(self.model, self.target, horizon=steps * settings.period, nodes=settings.nodes,
-                               vary=self.paths, bounds=self.bounds, tolerance=settings.tolerance)
+        self.controller = Plan(self.model, self._goal(0.0, np.zeros(3)), objective="time" if self.path is None else "track",
+                               horizon=steps * settings.period, nodes=settings.nodes, vary=self.paths, bounds=self.bounds,
+                               tolerance=settings.tolerance)
         self.step = Plan(self.plant, self.target, horizon=settings.period, nodes=1, vary=self.paths,
                          bounds=self.bounds, tolerance=settings.tolerance)
 
@@ -191,6 +207,22 @@ class ClosedLoop:
             raise ScenarioError(f"--plant-set {override!r} changes nothing the robot uses"
                                 + did_you_mean(path, self.model.robot.layout.names()))
 
+    def target_at(self, t):
+        """(3,) [m]: where the tip should be at time ``t`` [s] (the target, or the path there:
+        linear between its rows, held before the first and after the last)."""
+        if self.path is None:
+            return self.target
+        times, positions = self.path
+        return np.array([np.interp(t, times, positions[:, j]) for j in range(3)])
+
+    def _goal(self, t, offset):
+        """What the controller plans towards from time ``t``, less the mismatch estimate
+        ``offset`` (3,): the target, or the path with its times from ``t`` on."""
+        if self.path is None:
+            return self.target - offset
+        times, positions = self.path
+        return times - t, positions - offset
+
     def _shifted(self, inputs):
         """The next period's start: the plan's inputs (N, k) one period later in time (the last
         held), whatever the ratio of the period to the plan's step."""
@@ -209,7 +241,7 @@ class ClosedLoop:
             applied = np.zeros(k) if p == self.periods else None
             offset = disturbance + integral
             if applied is None:
-                self.controller.restart(T, self.target - offset)
+                self.controller.restart(T, self._goal(p * settings.period, offset))
                 started = time.perf_counter()
                 plan = self.controller.solve(start=start)
                 seconds = time.perf_counter() - started
@@ -227,10 +259,12 @@ class ClosedLoop:
                 message = f"stopped at t = {p * settings.period:g} s: the plant has no equilibrium ({exc})"
                 break
             tip = tips[0]
-            rows.append((p * settings.period, applied, T.copy(), tip, offset.copy(), seconds, converged))
+            rows.append((p * settings.period, applied, T.copy(), tip, offset.copy(), seconds, converged,
+                         self.target_at(p * settings.period)))
             if p < self.periods:
                 disturbance = disturbance + settings.disturbance_gain * (tip - model_tip - disturbance)
-                error = tips[1] - self.target             # the plant's tip at the period's end: the next measurement
+                # the plant's tip at the period's end (the next measurement) from where it should be then
+                error = tips[1] - self.target_at((p + 1) * settings.period)
                 if np.linalg.norm(error) <= INTEGRATION_WINDOW * settings.tolerance:
                     integral = integral + settings.integral_gain * error
                 T = self.step.temperatures(applied)[1]
@@ -240,12 +274,12 @@ class ClosedLoop:
         inputs = np.array([r[1] for r in rows])
         if not message and len(inputs) > 1:          # nothing is applied after the end: the last held
             inputs[-1] = inputs[-2]
-        tips = np.array([r[3] for r in rows])
+        tips, targets = np.array([r[3] for r in rows]), np.array([r[7] for r in rows])
         return ClosedLoopResult(
             "mpc (closed loop)", t, list(self.paths), inputs, list(self.step.keys), np.array([r[2] for r in rows]),
-            self.step.max_temperatures, tips, np.linalg.norm(tips - self.target, axis=1),
+            self.step.max_temperatures, tips, np.linalg.norm(tips - targets, axis=1),
             np.array([r[4] for r in rows]), np.array([r[5] for r in rows]), np.array([r[6] for r in rows]),
             self.target, settings.tolerance,
             {"period_s": settings.period, "horizon_s": self.controller.horizon, "nodes": settings.nodes,
              "integral_gain": settings.integral_gain, "disturbance_gain": settings.disturbance_gain, "bounds_W": self.controller.bounds.tolist()},
-            self.plant_overrides, message)
+            self.plant_overrides, message, targets, settings.path)

@@ -790,17 +790,17 @@ def held_from(t, errors, tolerance):
     return float(t[k])
 
 
-def read_path(path):
+def read_path(path, label="plan --path"):
     """``(times (m,) [s], positions (m, 3) [m])`` of a CSV with columns ``t``, ``x``, ``y``,
     ``z`` (units in the header: ``t [s]``, ``x [mm]``; none: SI), times increasing. Read by
-    :func:`tca_casadi.tables.read_table` (one-line errors for any bad file)."""
+    :func:`tca_casadi.tables.read_table` (one-line errors for any bad file, naming ``label``)."""
     from ..tables import name_of, read_table
-    table = read_table(path, "plan --path", "tip path", required=("t", "x", "y", "z"))
+    table = read_table(path, label, "tip path", required=("t", "x", "y", "z"))
     columns = {name_of(name).lower(): k for k, name in enumerate(table.header)}
     times = np.array([table.quantity(k, columns["t"], "time") for k in range(len(table.rows))])
     positions = np.array([[table.quantity(k, columns[c], "length") for c in "xyz"] for k in range(len(table.rows))])
     if not len(times):
-        raise ScenarioError(f"plan --path: {path}: no rows (a header t, x, y, z, then one row per point)")
+        raise ScenarioError(f"{label}: {path}: no rows (a header t, x, y, z, then one row per point)")
     later = np.flatnonzero(np.diff(times) <= 0)
     if later.size:
         raise ScenarioError(f"{table.where(int(later[0]) + 1)}: the times must increase from row to row")

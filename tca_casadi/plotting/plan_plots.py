@@ -21,8 +21,9 @@ def save_plan_png(plan, path):
     for j, key in enumerate(plan.keys):
         line = axes[1].plot(t, plan.temperatures[:, j], label=key, **line_style(j, n))[0]
         axes[1].axhline(plan.max_temperatures[j], color=line.get_color(), linestyle="--", linewidth=0.8)
-    axes[2].plot(t, plan.errors * 1e3, color="black", label="|tip - path|" if plan.objective == "track" else
-                 "|tip - target|", **line_style(0, n))
+    along = plan.objective == "track" or getattr(plan, "path", None) is not None       # a path, not a target
+    axes[2].plot(t, plan.errors * 1e3, color="black", label="|tip - path|" if along else "|tip - target|",
+                 **line_style(0, n))
     axes[2].axhline(plan.tolerance * 1e3, color="tab:green", linestyle="--", linewidth=1, label="tolerance")
     if plan.reached:
         for ax in axes:
@@ -32,7 +33,7 @@ def save_plan_png(plan, path):
     if np.all(plan.errors > 0):
         axes[2].set_yscale("log")
     labels = ["input power [mW]", "temperature [degC]\n(dashed: max)",
-              "distance to the path [mm]" if plan.objective == "track" else "distance to target [mm]"]
+              "distance to the path [mm]" if along else "distance to target [mm]"]
     for ax, label in zip(axes, labels):
         ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)

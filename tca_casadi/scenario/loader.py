@@ -26,6 +26,7 @@ def load_scenario(source, overrides=(), allow_code=False):
     raw, sources = read_raw(source)
     raw = apply_overrides(raw, overrides, sources)
     _anchor_law_folders(raw, sources)
+    _anchor_mpc_paths(raw, sources)
     if not allow_code:
         refuse_code(raw, sources)
     scenario = validate(raw, sources)
@@ -86,6 +87,20 @@ def _anchor_law_folders(raw, sources):
             folder = config.get("folder")
             if folder is None or isinstance(folder, str):
                 config["folder"] = str(here / folder) if folder else str(here)
+
+
+def _anchor_mpc_paths(raw, sources):
+    """An mpc controller's ``path`` (a CSV file) made absolute, relative to the scenario file's
+    folder (as a custom law's ``folder``)."""
+    if sources.origin.startswith("<"):
+        return
+    here = Path(sources.origin).resolve().parent
+    for module in raw.get("modules") or []:
+        for actuator in (module.get("actuators") or []) if isinstance(module, dict) else []:
+            drive = actuator.get("drive") if isinstance(actuator, dict) else None
+            settings = drive.get("mpc") if isinstance(drive, dict) else None
+            if isinstance(settings, dict) and isinstance(settings.get("path"), str):
+                settings["path"] = str(here / settings["path"])
 
 
 def read_raw(source):

@@ -260,18 +260,28 @@ class PiGains(Strict):
 class MpcSettings(Strict):
     """A model-predictive controller of the tip (``drive: {kind: mpc, mpc: {...}}``): every
     ``period`` [s] it plans the powers over ``horizon`` [s] (``nodes`` steps, the minimum-time
-    plan of ``tca-casadi plan``) from the measured temperatures, towards ``target`` [m] shifted
+    plan of ``tca-casadi plan``, or its tracking plan of ``path``) from the measured
+    temperatures, towards ``target`` [m] (or the path ahead) shifted
     by the estimated mismatch of plant and model (``disturbance_gain``: the filter of the
     measured tip less the model's; ``integral_gain``: of the tip error near the target, per
     period: no steady offset when the plant differs from the model), and applies the first
     step."""
-    target: Vector3Length
+    target: Optional[Vector3Length] = None
+    #: instead of a target: a tip path to follow, a CSV with columns t [s], x, y, z (as ``plan
+    #: --path`` reads; relative to the scenario's folder)
+    path: Optional[str] = None
     period: Annotated[float, _quantity("time"), Field(gt=0)] = 0.5
     horizon: Annotated[float, _quantity("time"), Field(gt=0)] = 10.0
     nodes: Annotated[int, Field(ge=1, le=500)] = 20
     tolerance: Annotated[float, _quantity("length"), Field(gt=0)] = 1e-4
     integral_gain: Annotated[float, Field(ge=0, le=1)] = 0.2
     disturbance_gain: Annotated[float, Field(ge=0, le=1)] = 0.5
+
+    @model_validator(mode="after")
+    def _target_or_path(self):
+        if (self.target is None) == (self.path is None):
+            raise ValueError("an mpc controller follows a target: [x, y, z] or a path: CSV file (one of them)")
+        return self
 
     @model_validator(mode="after")
     def _horizon_holds_a_period(self):

@@ -331,6 +331,27 @@ def test_mpc_settles_on_a_plant_that_differs_from_its_model():
     assert blind.errors[-1] > 10 * corrected.errors[-1]
 
 
+FOLLOW = "bending.tca2.drive.mpc={path: bending_module_mpc_path.csv, period: 1 s, horizon: 10 s, nodes: 10}"
+
+
+def test_mpc_follows_a_path_with_the_model_and_with_a_plant_that_differs():
+    """``mpc: {path: CSV}`` (``scenarios/bending_module_mpc_path.csv``: the tip's poses as TCA 2
+    heats to 50 degC in 20 s and cools to 40 degC in 20 more, every 2 s): with the exact model the
+    tip stays within 1e-3 mm of the path (linear between its rows) at every period (measured
+    4e-4 mm), and with the body 10 % stiffer and the conductance 20 % larger within 0.02 mm
+    (measured 0.012); the path's target at each period is in timeseries' target columns."""
+    from tca_casadi.control import ClosedLoop
+    from tca_casadi.control.plan import read_path
+    exact = ClosedLoop(MPC, ["duration=40", FOLLOW]).run()
+    assert exact.completed and exact.reached_at_s == 0.0, exact.summary()
+    assert np.max(exact.errors) < 1e-6
+    times, positions = read_path(SCENARIOS / "bending_module_mpc_path.csv")
+    assert_allclose(exact.targets[::2], positions, rtol=0, atol=1e-12)
+    assert exact.header()[-3:] == ["target_x [m]", "target_y [m]", "target_z [m]"]
+    robust = ClosedLoop(MPC, ["duration=40", FOLLOW], PLANT).run()
+    assert robust.completed and np.max(robust.errors) < 2e-5, robust.summary()
+
+
 def test_cli_simulate_runs_the_closed_loop_and_reports_its_solve_times(tmp_path, capsys):
     assert main(["simulate", str(MPC), "--set", "duration=8", "--plant-set", PLANT[0], "-o", str(tmp_path),
                  "--quiet"]) == 0
@@ -355,6 +376,13 @@ def test_closed_loop_bad_input(tmp_path, capsys):
     assert "the horizon (0.5 s) is shorter than the period (1 s)" in capsys.readouterr().err
     assert main(["validate", str(HEATING), "--set", "bending.tca2.drive.kind=mpc"]) == 2
     assert "an mpc drive needs its controller's settings" in capsys.readouterr().err
+    assert main(["simulate", str(MPC), "--set", "bending.tca2.drive.mpc.path=ramp.csv", "-o", str(tmp_path),
+                 "--quiet"]) == 2
+    assert "follows a target: [x, y, z] or a path: CSV file (one of them)" in capsys.readouterr().err
+    assert main(["simulate", str(MPC), "--set", "bending.tca2.drive.mpc={path: nothere.csv}", "-o", str(tmp_path),
+                 "--quiet"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: bending.tca2.drive.mpc.path: ") and err.endswith("nothere.csv: no such file"), err
     with pytest.raises(Exception, match="an mpc drive runs in the closed loop"):
         TimeSimulation(Simulation.from_file(MPC), dt=1.0)
 
