@@ -72,17 +72,18 @@ def test_a_power_budget_below_full_power_is_the_bang_bang_of_the_budget(target, 
 
 def test_a_power_budget_shared_by_three_tcas_on_the_arm():
     """The arm's bending module (three TCAs by power) to where TCA 1 at 65 degC and the others at
-    42.5 degC put the tip: its fastest plan draws up to 2.65 W at once; with a 1.2 W budget the
-    total stays within it (to 1e-6 W) at every step and the target is reached later."""
+    42.5 degC put the tip: its fastest plan in 6 s steps draws 1.34 W at once; with a 0.9 W budget
+    the total stays within it (to 1e-6 W) at every step and the tip comes slower to the target."""
     drives = [f"bending.tca{k}.drive={{kind: power, value: 0}}" for k in (1, 2, 3)]
     arm = SCENARIOS / "arm.yaml"
     goal = Simulation.from_file(arm, drives + ["bending.tca1.temperature=65", "bending.tca2.temperature=42.5",
                                                "bending.tca3.temperature=42.5"]).solve(warn=False).tip_position
-    free = Plan(Simulation.from_file(arm, drives), goal, horizon=30.0, nodes=10).solve()
-    held = Plan(Simulation.from_file(arm, drives), goal, horizon=30.0, nodes=10, power_budget=1.2).solve()
-    assert free.reached and np.max(free.total_powers) > 2.0, free.summary()
+    free = Plan(Simulation.from_file(arm, drives), goal, horizon=30.0, nodes=5).solve()
+    held = Plan(Simulation.from_file(arm, drives), goal, horizon=30.0, nodes=5, power_budget=0.9).solve()
+    assert free.reached and np.max(free.total_powers) > 1.2, free.summary()
     assert held.converged and held.reached, held.summary()
-    assert np.max(held.total_powers) <= 1.2 + 1e-6 and held.reached_at_s > free.reached_at_s
+    assert np.max(held.total_powers) <= 0.9 + 1e-6 and held.reached_at_s >= free.reached_at_s
+    assert held.errors[2] > 1e-5 > free.errors[2]          # at 12 s: 0.099 mm with it, 1.6e-8 mm without
 
 
 def test_the_plan_replayed_in_simulate_gives_the_planned_temperatures_and_tips(fastest):
