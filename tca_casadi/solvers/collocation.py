@@ -155,12 +155,22 @@ class CollocationSolver:
                                                     self.nlp.meshes, self.degree + 1)
         return self._higher
 
+    #: ``solver.jit: auto`` compiles this solver's residual (set by a long dynamic run)
+    compile_when_auto = False
+
+    @property
+    def compiles(self):
+        """Whether numeric residuals run compiled (``solver.jit: true``, or ``auto`` where the
+        solver asked for it)."""
+        jit = getattr(self.options, "jit", False)
+        return jit is True or (jit == "auto" and self.compile_when_auto)
+
     @property
     def square(self):
         """The :class:`SquareSystem` (residual, sparse Jacobian, Newton) of this NLP."""
         if self._square is None:
             fast = None
-            if getattr(self.options, "jit", False):
+            if self.compiles:
                 from .compiled import compiled
                 fast = compiled(self._constraints)
             self._square = SquareSystem(self.nlp, self._constraints, self._jacobian, compiled_residual=fast)

@@ -165,7 +165,8 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
     if not first.converged:
         series.message = f"no equilibrium at t = {series.t[0]:g} s: {first.message}"
         return series
-    dynamics = RodDynamics(sim, config.integrator, damping_of(config.damping, sim.scenario))
+    dynamics = RodDynamics(sim, config.integrator, damping_of(config.damping, sim.scenario), steps=len(path) - 1)
+    series.compiled = dynamics.solver.compiles
     state = dynamics.start(first, series.t[0])
     state.params = np.array(path[0], float)         # the steps start from the values after any event at t0
     account = EnergyAccount(dynamics)

@@ -356,7 +356,8 @@ class TimeSimulation:
                        + np.max(np.abs(energies[:, 3:6])))
         worst = float(np.max(np.abs(energies[:, ENERGY_COLUMNS.index("energy_balance")])))
         checked = [s.balance.relative for s in series.solutions if s.balance is not None]
-        return {"global_balance_checked": len(checked), "global_balance_every": config.balance_every,
+        return {"compiled_residual": bool(getattr(series, "compiled", False)),
+                "global_balance_checked": len(checked), "global_balance_every": config.balance_every,
                 "global_balance_worst": float(max(checked)) if checked else None,
 "integrator": config.integrator, "damping": None if config.damping is None else
                 config.damping.model_dump(), "peak_tip_speed": float(np.max(np.linalg.norm(series.tip_velocities, axis=1))),
@@ -422,7 +423,8 @@ class TimeSimulation:
         if report["dynamics"] is not None:
             motion = report["dynamics"]
             lines.append(f"  dynamics ({motion['integrator']}): peak tip speed {motion['peak_tip_speed'] * 1e3:.4g} mm/s, "
-                         f"energy balance {motion['energy_balance_relative']:.1e} of the energy in play")
+                         f"energy balance {motion['energy_balance_relative']:.1e} of the energy in play"
+                         + ("; residual compiled (solver.jit)" if motion["compiled_residual"] else ""))
             if motion["global_balance_checked"]:
                 lines.append(f"  global balance checked at {motion['global_balance_checked']} of "
                              f"{len(series.solutions)} outputs (the start, the first step, every "

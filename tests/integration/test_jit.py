@@ -38,3 +38,30 @@ def test_without_a_compiler_it_says_so(tmp_path, monkeypatch):
     monkeypatch.delenv("CC", raising=False)
     with pytest.raises(TcaError, match="needs a C compiler"):
         Simulation.from_file(BENDING, HEATED + ["solver.jit=true"]).solve(warn=False)
+
+
+def test_auto_compiles_only_a_long_dynamic_run_and_only_with_a_compiler(tmp_path, monkeypatch):
+    """``solver.jit: auto`` (the default): a static solve and a short dynamic run stay in CasADi's
+    virtual machine; a dynamic run of ``AUTO_JIT_STEPS`` steps or more (lowered to 3 here) runs
+    its step's residual compiled, with the same motion to 1e-12 m and ``compiled_residual`` in
+    the report; without a C compiler it runs uncompiled, and says so."""
+    from tca_casadi.solvers import dynamics
+    from tca_casadi.studies.timeline import TimeSimulation
+    monkeypatch.setenv("TCA_CASADI_CACHE", str(tmp_path))
+    cantilever = SCENARIOS / "analytic" / "steel_cantilever.yaml"
+
+    def run(steps_to_compile):
+        monkeypatch.setattr(dynamics, "AUTO_JIT_STEPS", steps_to_compile)
+        timed = TimeSimulation(Simulation.from_file(cantilever, ["duration=0.01"]), dt=0.002)
+        series = timed.run()
+        assert series.completed, series.message
+        return series, timed.report(series)["dynamics"]["compiled_residual"]
+
+    plain, compiled_plain = run(10 ** 9)
+    fast, compiled_fast = run(3)
+    assert not compiled_plain and compiled_fast and list((tmp_path / "jit").glob("nlp_g_*.so"))
+    assert_allclose(fast.tip_positions(), plain.tip_positions(), rtol=0, atol=1e-12)
+    monkeypatch.setenv("PATH", str(tmp_path))
+    monkeypatch.delenv("CC", raising=False)
+    _, compiled_without = run(3)
+    assert not compiled_without
