@@ -150,6 +150,8 @@ class StepState:
     nodes: list
     w: np.ndarray
     params: np.ndarray
+    #: the tip module's end rotation (3, 3) where the step's Solution gave it (None: from ``w``)
+    tip_rotation: np.ndarray = None
 
 
 class RodDynamics:
@@ -236,7 +238,8 @@ class RodDynamics:
             middle = StepState(now.t + 0.5 * h, self.solver.node_values(w), w, solved_at)
             self._midpoints = (self._midpoints + [middle])[-2:]
             w = 2.0 * w - now.w
-        state = StepState(now.t + h, self.solver.node_values(w), w, params)
+        rotation = None if self.integrator == "midpoint" else solution.modules[self.sim.robot.tip_index].R[:, :, -1]
+        state = StepState(now.t + h, self.solver.node_values(w), w, params, rotation)
         self.states = (self.states + [state])[-2:]
         self._history_w = (self._history_w + [(state.t, w)])[-3:]
         return state, solution
@@ -244,10 +247,13 @@ class RodDynamics:
     def tip_velocity(self, state):
         """The tip's global velocity [m/s] (3,) at ``state``: ``R q`` at the tip module's end."""
         nlp, tip = self.solver.nlp, self.sim.robot.tip_index
-        _, ends, _ = self.solver._outputs_at(state.w, np.zeros(nlp.parameter_size))
+        rotation = state.tip_rotation
+        if rotation is None:
+            _, ends, _ = self.solver._outputs_at(state.w, np.zeros(nlp.parameter_size))
+            rotation = rotation_numpy(ends[3:7, tip])
         last = state.nodes[tip][1][:, -(self.solver.degree + 1):]            # the last interval's nodes
         q_end = last @ nlp.scheme.D
-        return rotation_numpy(ends[3:7, tip]) @ q_end[0:3]
+        return rotation @ q_end[0:3]
 
     def checkpoint(self):
         """The stepper's history (states, predictor and midpoint memories), for :meth:`restore`."""
