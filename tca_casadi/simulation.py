@@ -18,7 +18,7 @@ from .solvers.assemble import record_slides
 from .scenario import load_scenario
 from .scenario.loader import validate
 from .scenario.overrides import apply_overrides
-from .solvers import CollocationSolver, ShootingSolver
+from .solvers import CollocationSolver
 from .solvers import accuracy
 from .solvers.continuation import BranchFollower
 from .solvers.localisation import localise
@@ -26,7 +26,8 @@ from .status import SolveStatus, Status
 
 log = logging.getLogger(__name__)
 
-SOLVERS = {"collocation": CollocationSolver, "shooting": ShootingSolver}
+#: solver methods and the class behind each (the shooting solver imported when first asked for)
+SOLVERS = {"collocation": "CollocationSolver", "shooting": "ShootingSolver"}
 
 
 class Simulation:
@@ -101,7 +102,8 @@ class Simulation:
                 self._solvers[method] = CollocationSolver.shared(
                     self.robot, self.scenario.solver, self.robot.structure_key(self.scenario))
             else:
-                self._solvers[method] = SOLVERS[method](self.robot, self.scenario.solver)
+                from . import solvers
+                self._solvers[method] = getattr(solvers, SOLVERS[method])(self.robot, self.scenario.solver)
         return self._solvers[method]
 
     def solve(self, warm_start=None, method=None, continuation=None, refine=True, warn=True):

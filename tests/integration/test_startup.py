@@ -30,3 +30,13 @@ def test_help_loads_no_numerical_library(scenarios):
     result = subprocess.run([sys.executable, "-c", probe.format(argv=[], heavy=HEAVY)],
                             capture_output=True, text=True, check=True)
     assert result.stdout.strip().endswith("LOADED [] 0"), result.stdout
+
+
+def test_a_collocation_solve_does_not_load_the_shooting_solver(scenarios, tmp_path):
+    """A command imports what it uses: ``solve`` by collocation (the default) never loads the
+    shooting solver or scipy.integrate, which ``check`` and ``--method shooting`` need."""
+    argv = ["solve", str(scenarios / "bending_module.yaml"), "-o", str(tmp_path), "--no-plot"]
+    probe = PROBE.replace("print(\"LOADED\"", "print(\"SHOOTING\", 'tca_casadi.solvers.shooting' in sys.modules)\nprint(\"LOADED\"")
+    result = subprocess.run([sys.executable, "-c", probe.format(argv=argv, heavy=("scipy.integrate",))],
+                            cwd=scenarios, capture_output=True, text=True, check=True)
+    assert "SHOOTING False" in result.stdout and result.stdout.strip().endswith("LOADED [] 0"), result.stdout
