@@ -53,6 +53,7 @@ def build_parser():
                        help="output directory (default: results/<scenario name>)")
     solve.add_argument("--json", action="store_true", help="print solution.json to stdout")
     solve.add_argument("--no-plot", action="store_true", help="do not draw robot.png")
+    solve.add_argument("--vtk", action="store_true", help="also VTK files for ParaView: vtk_NNNN_rods.vtu, _actuators.vtu, _surfaces.vtu, solution.pvd (the frames in time) and solution_names.json")
     solve.add_argument("--method", choices=["collocation", "shooting"], default=None,
                        help="solver (default: the scenario's, collocation)")
 
@@ -114,6 +115,7 @@ def build_parser():
     sequence.add_argument("--frames", type=int, default=6,
                           help="intermediate frames per transition in the animation (default 6)")
     sequence.add_argument("--no-animation", action="store_true", help="no GIF/MP4")
+    sequence.add_argument("--vtk", action="store_true", help="also VTK files for ParaView (a frame per step): vtk_NNNN_rods.vtu, _actuators.vtu, _surfaces.vtu, sequence.pvd (the frames in time) and sequence_names.json")
     sequence.add_argument("--check", action="store_true",
                           help="also solve every step by shooting and compare (as `check` does); "
                                "writes sequence_check.json")
@@ -126,6 +128,7 @@ def build_parser():
                           help="output directory (default: results/<scenario name>/simulate)")
     simulate.add_argument("--duration", default=None, help="[s] (units allowed: '30 s'); default the scenario's")
     simulate.add_argument("--dt", default="0.1", help="output step [s] (default 0.1); with dynamics, the time step")
+    simulate.add_argument("--vtk", action="store_true", help="also VTK files for ParaView (a frame per output time): vtk_NNNN_rods.vtu, _actuators.vtu, _surfaces.vtu, simulate.pvd (the frames in time) and simulate_names.json")
     simulate.add_argument("--timeline", type=Path, default=None, metavar="YAML",
                           help="a file with a timeline (and optionally a duration) that replaces the scenario's, "
                                "e.g. a plan's plan_timeline.yaml")
@@ -343,15 +346,19 @@ def _print_thermal(scenario, robot):
 def _solve(args):
     from .simulation import Simulation
     sim = Simulation.from_file(Path(args.scenario), args.overrides, method=args.method, allow_code=args.allow_code)
-    with _results(args, sim, "solve", ["solution.json", "arrays.npz", "robot.png"],
-                  stale=["robot.png"] if args.no_plot else []) as run:
+    vtk, vtk_stale = _vtk_files(args, "solution")
+    with _results(args, sim, "solve", ["solution.json", "arrays.npz", "robot.png"] + vtk,
+                  stale=(["robot.png"] if args.no_plot else []) + vtk_stale) as run:
         solution = sim.solve(warn=False)          # its warnings are in the summary and solution.json
         written = list(solution.save(run.staging))
+        from .studies.objects import object_poses
+        objects = object_poses(sim.scenario, sim.robot, solution)
         if not args.no_plot:
             from .plotting import save_robot_png
-            from .studies.objects import object_poses
-            objects = object_poses(sim.scenario, sim.robot, solution)
             written.append(save_robot_png(solution, run.staging / "robot.png", objects=objects))
+        if args.vtk:
+            from .vtk_files import write_series
+            written += write_series([(0.0, solution, objects)], run.staging, "solution")
     if args.json:
         print(json.dumps(solution.to_dict(), indent=2))
     else:
@@ -433,8 +440,9 @@ def _sequence(args):
     frames = 0 if args.no_animation else max(args.frames, 0)
     stale = ["step_*.png"] + (["sequence.gif", "sequence.mp4"] if args.no_animation else []) + \
         ([] if args.check else ["sequence_check.json"])
-    with _results(args, sim, "sequence", ["sequence.csv", "sequence_check.json", "sequence.gif", "sequence.mp4"],
-                  stale=stale, default="sequence") as run:
+    vtk, vtk_stale = _vtk_files(args, "sequence")
+    with _results(args, sim, "sequence", ["sequence.csv", "sequence_check.json", "sequence.gif", "sequence.mp4"] + vtk,
+                  stale=stale + vtk_stale, default="sequence") as run:
         result = _with_progress(lambda progress: run_sequence(sim, frames_per_step=frames, progress=progress,
                                                               check=args.check), "steps", args.quiet)
         output = run.staging
@@ -445,10 +453,22 @@ def _sequence(args):
         if not args.no_animation:
             written += _with_progress(lambda progress: save_animation(result, output, progress=progress),
                                       "animation", args.quiet)
+        if args.vtk:
+            from .vtk_files import write_series
+            written += write_series([(float(k), solution, result.objects[k] if result.objects else ())
+                                     for k, solution in enumerate(result.solutions)], output, "sequence")
     print(result.summary())
     print(f"wrote {len(written)} files to {run.directory}: sequence.csv, step PNGs"
-          + ("" if args.no_animation else ", " + ", ".join(p.name for p in written if p.suffix in (".gif", ".mp4"))))
+          + ("" if args.no_animation else ", " + ", ".join(p.name for p in written if p.suffix in (".gif", ".mp4")))
+          + (", VTK frames (sequence.pvd)" if args.vtk else ""))
     return 0 if result.converged and result.agree is not False else 1
+
+
+def _vtk_files(args, name):
+    """``(files, stale)`` of a command's VTK output: the frames and ``NAME.pvd`` with ``--vtk``,
+    else the same as files an earlier run may have left."""
+    files = ["vtk_*.vtu", f"{name}.pvd", f"{name}_names.json"]
+    return (files, []) if args.vtk else ([], files)
 
 
 def _results(args, sim, command, files, stale=(), default=None):
@@ -558,8 +578,11 @@ def _simulate(args):
     timed = TimeSimulation(sim, duration=duration, dt=dt)
     plots = ["timeseries.png"]
     movies = ["simulate.gif", "simulate.mp4"]
-    with _results(args, sim, "simulate", ["timeseries.csv", "simulation.json"] + plots + movies,
-                  stale=(plots if args.no_plot else []) + (movies if args.no_animation else []), default="simulate") as run:
+    vtk, vtk_stale = _vtk_files(args, "simulate")
+    frames = []
+    with _results(args, sim, "simulate", ["timeseries.csv", "simulation.json"] + plots + movies + vtk,
+                  stale=(plots if args.no_plot else []) + (movies if args.no_animation else []) + vtk_stale,
+                  default="simulate") as run:
         output = run.staging
         series = _with_progress(timed.run, "simulate", quiet=args.quiet)
         written = [series.to_csv(output / "timeseries.csv"),
@@ -575,7 +598,13 @@ def _simulate(args):
                                                                                   **moving), "animation", quiet=args.quiet)
             written += paths
             print(f"animation at {'real time' if speed_up == 1 else f'{speed_up}x real time'}")
-    print("wrote " + ", ".join(str(p) for p in run.final(written)))
+        if args.vtk and series.solutions:
+            from .vtk_files import write_series
+            objects = series.objects or [()] * len(series.solutions)
+            frames = write_series(zip(series.t, series.solutions, objects), output, "simulate")
+    grids = [p for p in frames if p.suffix == ".vtu"]
+    print("wrote " + ", ".join(str(p) for p in run.final(written + [p for p in frames if p.suffix != ".vtu"]))
+          + (f" and {len(grids)} VTK grids (vtk_*.vtu, {len(series.solutions)} frames)" if frames else ""))
     return 0 if series.completed else 1
 
 
@@ -585,6 +614,9 @@ def _closed_loop(args, sim, overrides, duration):
     timeseries.png (inputs, temperatures, distance to the target)."""
     from .control.mpc import ClosedLoop
     from .plotting.plan_plots import save_plan_png
+    if args.vtk:
+        raise ScenarioError("--vtk: a closed loop (an mpc drive) keeps the plant's tip and temperatures, not its "
+                            "shapes; run simulate --timeline with the applied powers for VTK frames")
     loop = ClosedLoop(Path(args.scenario), overrides, args.plant_overrides, duration=duration,
                       allow_code=args.allow_code)
     with _results(args, sim, "simulate", ["timeseries.csv", "simulation.json", "timeseries.png"],
