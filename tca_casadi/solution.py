@@ -9,6 +9,7 @@ from typing import Optional
 
 import numpy as np
 
+from .results import ResultAPI
 from .errors import SolverError
 from .model.rotations import matrix_to_quaternion
 from .status import SolveStatus
@@ -279,8 +280,8 @@ class BodyResult:
                 "residual_force": self.residual_force.tolist(), "residual_moment": self.residual_moment.tolist()}
 
 
-@dataclass
-class Solution:
+@dataclass(repr=False)
+class Solution(ResultAPI):
     """An equilibrium (or a failed attempt: ``converged`` is False, never hidden).
 
     ``result`` (:class:`~tca_casadi.status.SolveStatus`) says how the solve ended; ``converged``,
@@ -311,6 +312,11 @@ class Solution:
     @property
     def converged(self):
         return self.result.success
+
+    def figure(self):
+        """``robot.png``'s figure: the robot drawn in 3D."""
+        from .plotting import save_robot_png
+        return save_robot_png(self, None)
 
     @property
     def status(self):

@@ -28,14 +28,15 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ScenarioError, SolverError
+from ..results import ResultAPI, status_of
 from .plan import HeatingRecord, Plan, _NoEquilibrium, held_from, read_path
 
 #: the tip error is integrated only within this many tolerances of the target (anti-windup)
 INTEGRATION_WINDOW = 3.0
 
 
-@dataclass
-class ClosedLoopResult(HeatingRecord):
+@dataclass(repr=False)
+class ClosedLoopResult(ResultAPI, HeatingRecord):
     """A closed-loop run: the period times ``t`` (n,) [s], the applied ``inputs`` (n, k) [W]
     (``paths``; the last row repeats the one before: nothing is applied after the end), the
     plant's ``temperatures`` (n, m) [degC] (``keys``), ``tips`` (n, 3) [m], ``errors`` (n,) [m]
@@ -63,6 +64,18 @@ class ClosedLoopResult(HeatingRecord):
     @property
     def reached(self):
         return self.reached_at_s is not None
+
+    @property
+    def result(self):
+        """:class:`SolveStatus` of the run: success when every plan converged and the tip ends
+        within the tolerance."""
+        return status_of(self.completed and self.reached, "mpc (closed loop)", self.message,
+                         nit=len(self.t) - 1, solve_time_s=float(np.nansum(self.solve_times)))
+
+    def figure(self):
+        """``timeseries.png``'s figure of a closed loop."""
+        from ..plotting.plan_plots import save_plan_png
+        return save_plan_png(self, None)
 
     @property
     def completed(self):

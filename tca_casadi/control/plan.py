@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ScenarioError, SolverError
+from ..results import ResultAPI
 from ..solvers.thermal import steady_state, zero_order_hold
 from ..status import SolveStatus, Status
 
@@ -83,8 +84,8 @@ class HeatingRecord:
     errors: np.ndarray
 
 
-@dataclass
-class PlanResult(HeatingRecord):
+@dataclass(repr=False)
+class PlanResult(ResultAPI, HeatingRecord):
     """A plan: the node times ``t`` (N + 1,) [s], the varied inputs' powers ``inputs`` (N, k) [W]
     (``paths`` their scenario paths; :meth:`drive_values` in the drives' own units), the heated TCAs' ``temperatures`` (N + 1, n) [degC] (``keys``), the
     tip ``tips`` (N + 1, 3) [m] and its distance ``errors`` (N + 1,) [m] from ``targets`` (N + 1,
@@ -139,6 +140,21 @@ class PlanResult(HeatingRecord):
     @property
     def reached(self):
         return self.reached_at_s is not None
+
+    @property
+    def success(self):
+        """Converged and the target reached (held to the horizon's end)."""
+        return bool(self.converged and self.reached)
+
+    @property
+    def status(self):
+        return Status.CONVERGED if self.success else (self.result.status if not self.result.success
+                                                      else Status.ABOVE_TOLERANCE)
+
+    def figure(self):
+        """``plan.png``'s figure."""
+        from ..plotting.plan_plots import save_plan_png
+        return save_plan_png(self, None)
 
     def timeline(self):
         """The schedule as ``simulate`` takes it: ``{duration, timeline: [{at, set}, ...]}`` (one

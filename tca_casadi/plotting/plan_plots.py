@@ -2,8 +2,7 @@
 tip's distance from the target against time."""
 import numpy as np
 
-from ..output import save_figure
-from .robot3d import _pyplot
+from .robot3d import _pyplot, finish
 from .sweep_plots import line_style
 
 
@@ -42,7 +41,4 @@ def save_plan_png(plan, path):
     state = "reached" if plan.reached else "not reached"
     name = plan.objective if plan.objective.startswith("mpc") else f"plan ({plan.objective})"
     axes[0].set_title(f"{name}: {state}, energy {plan.energy_J:.3g} J", fontsize=10)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=110)
-    plt.close(fig)
-    return path
+    return finish(plt, fig, path, dpi=110)

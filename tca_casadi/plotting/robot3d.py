@@ -7,11 +7,14 @@ COLORS = {"heated": "#d62728", "passive": "#2ca02c", "tendon": "#ff7f0e",
           "obstacle": "#8c8c8c", "contact": "#e377c2"}
 
 
-def finish(plt, fig, path, dpi=110):
-    """Lay out ``fig``, save it atomically at ``path``, close it; return ``path``."""
+def finish(plt, fig, path, dpi=110, **options):
+    """Lay out ``fig``, save it atomically at ``path``, close it; return ``path``. ``path``
+    None: return the open figure instead (what a result's ``plot()`` hands over)."""
     from ..output import save_figure
     fig.tight_layout()
-    save_figure(fig, path, dpi=dpi)
+    if path is None:
+        return fig
+    save_figure(fig, path, dpi=dpi, **options)
     plt.close(fig)
     return path
 
@@ -210,11 +213,7 @@ def set_equal_limits(ax, low, high, margin=0.08, thinnest=0.25):
 
 
 def save_robot_png(solution, path, **options):
-    """Draw ``solution`` and save it as a PNG at ``path``."""
+    """Draw ``solution`` and save it as a PNG at ``path`` (None: return the figure)."""
     plt = _pyplot()
     ax = draw_robot(solution, **options)
-    ax.figure.tight_layout()
-    from ..output import save_figure
-    save_figure(ax.figure, path, dpi=120, bbox_inches="tight", pad_inches=0.15)
-    plt.close(ax.figure)
-    return path
+    return finish(plt, ax.figure, path, dpi=120, bbox_inches="tight", pad_inches=0.15)

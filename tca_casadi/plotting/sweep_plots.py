@@ -2,8 +2,7 @@
 (events marked), and the robot drawn at a few points of the branch."""
 import numpy as np
 
-from ..output import save_figure
-from .robot3d import _equal_axes, _pyplot, _smooth, draw_obstacle, style_axes
+from .robot3d import _equal_axes, _pyplot, _smooth, draw_obstacle, finish, style_axes
 
 
 #: marker, dash pattern and size per curve, so that curves lying on each other stay visible
@@ -53,10 +52,7 @@ def plot_sweep(result, path):
         ax.legend(fontsize=8)
     state = "" if result.completed else "  (stopped early)"
     top.set_title(f"sweep of {', '.join(p.path for p in result.parameters)}{state}", fontsize=10)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=120)
-    plt.close(fig)
-    return path
+    return finish(plt, fig, path, dpi=120)
 
 
 def plot_sweep_robots(result, path, count=5):
@@ -85,7 +81,4 @@ def plot_sweep_robots(result, path, count=5):
     ax.set_title("robot along the sweep (thick: centerline; thin: heated TCAs and tendons, "
                  "dashed: passive)", fontsize=8)
     ax.legend(loc="upper left", fontsize=7)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=120, bbox_inches="tight", pad_inches=0.15)
-    plt.close(fig)
-    return path
+    return finish(plt, fig, path, dpi=120, bbox_inches="tight", pad_inches=0.15)

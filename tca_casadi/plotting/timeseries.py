@@ -2,8 +2,7 @@
 displacement against time, events marked."""
 import numpy as np
 
-from ..output import save_figure
-from .robot3d import _pyplot
+from .robot3d import _pyplot, finish
 from .sweep_plots import line_style
 
 
@@ -39,7 +38,4 @@ def save_timeseries_png(series, path, events=()):
     axes[-1].set_xlabel("time [s]")
     state = "" if series.completed else f"  (stopped: {series.message[:60]})"
     axes[0].set_title(f"simulate{state}", fontsize=10)
-    fig.tight_layout()
-    save_figure(fig, path, dpi=110)
-    plt.close(fig)
-    return path
+    return finish(plt, fig, path, dpi=110)

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model.rotations import rotation_angle
+from ..results import ResultAPI, status_of
 
 #: default agreement tolerances: tip, centerline and slack lengths [m]; tensions relative to
 #: the larger of the two, floored at 1e-6 of the robot's largest tension (and 1e-9 N), so that
@@ -19,8 +20,8 @@ TENSION_FLOOR = 1e-9
 TENSION_FLOOR_FRACTION = 1e-6
 
 
-@dataclass
-class CheckReport:
+@dataclass(repr=False)
+class CheckReport(ResultAPI):
     """Differences between two solutions of one scenario (SI units)."""
     scenario: str
     methods: tuple
@@ -48,6 +49,33 @@ class CheckReport:
                 and self.max_centerline_distance <= self.position_tolerance
                 and self.worst_relative_tension <= self.tension_tolerance
                 and max(self.slack_differences.values(), default=0.0) <= self.position_tolerance)
+
+    @property
+    def result(self):
+        """:class:`SolveStatus` of the check: success when both solvers converged and agree."""
+        return status_of(self.agree, "check (collocation against shooting)",
+                         f"tip {self.tip_position_difference:.1e} m, worst tension {self.worst_relative_tension:.1e}")
+
+    @property
+    def message(self):
+        return self.result.message
+
+    def figure(self):
+        """The differences against their tolerances (bars, log scale)."""
+        from ..plotting.robot3d import _pyplot, finish
+        plt = _pyplot()
+        fig, ax = plt.subplots(figsize=(6.4, 3.2))
+        names = ["tip [m]", "centerline [m]"] + [f"{k} [rel]" for k in self.tension_differences]
+        values = [self.tip_position_difference, self.max_centerline_distance] + [d["relative"] for d in self.tension_differences.values()]
+        limits = [self.position_tolerance] * 2 + [self.tension_tolerance] * len(self.tension_differences)
+        ax.bar(range(len(values)), [max(v, 1e-18) for v in values], color=["tab:green" if v <= lim else "tab:red"
+                                                                           for v, lim in zip(values, limits)])
+        ax.scatter(range(len(limits)), limits, marker="_", s=400, color="black", label="tolerance")
+        ax.set_yscale("log")
+        ax.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=7)
+        ax.set_title(f"check of {self.scenario}: {'agree' if self.agree else 'DISAGREE'}", fontsize=10)
+        ax.legend(fontsize=7)
+        return finish(plt, fig, None)
 
     def to_dict(self):
         data = asdict(self)

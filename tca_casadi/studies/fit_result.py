@@ -7,6 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from ..output import atomic_path, write_json
+from ..results import ResultAPI, status_of
+from ..status import Status
 from .fit import CONDITION_LIMIT, NULL_SHARE, SHARE, SINGULAR
 
 
@@ -30,8 +32,8 @@ class FittedParameter:
                 "identifiable": self.identifiable}
 
 
-@dataclass
-class FitResult:
+@dataclass(repr=False)
+class FitResult(ResultAPI):
     """``parameters`` (FittedParameter), ``correlation`` (p, p; NaN where not identifiable),
     ``covariance`` (p, p) in the parameters' units, ``condition`` (of the Fisher information
     ``J^T J`` in scaled parameters), ``warnings`` (texts), residual statistics and status."""
@@ -122,6 +124,17 @@ class FitResult:
                    measured_scale=measured)
 
     # ------------------------------------------------------------------ text and files
+    @property
+    def result(self):
+        """:class:`SolveStatus` of the least squares."""
+        return status_of(self.converged, "least squares (fit)", self.message, Status.ALGORITHM_FAILED,
+                         nit=self.evaluations, solve_time_s=self.wall_time_s)
+
+    def figure(self):
+        """``fit.png``'s figure: measured against predicted, the residuals."""
+        from ..plotting.fit_plots import plot_fit
+        return plot_fit(self, None)
+
     def summary(self):
         what = (f"a time series of {len(self.train)} samples" if self.fit.time_series
                 else f"{len(self.train)} experiment(s)")

@@ -10,11 +10,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model.rotations import matrix_to_quaternion
+from ..results import ResultAPI, status_of
+from ..status import Status
 from ..solvers.continuation import NOISE, BranchFollower, _slack_pattern
 
 
-@dataclass
-class TimeSeries:
+@dataclass(repr=False)
+class TimeSeries(ResultAPI):
     """Solutions at the output times ``t`` [s] (n,), with the temperatures [degC] and electrical
     powers [W] (``nan`` where a TCA's temperature is set, not heated) of the TCAs ``keys``,
     arrays (n, len(keys))."""
@@ -32,6 +34,27 @@ class TimeSeries:
     @property
     def completed(self):
         return len(self.solutions) == len(self.t) and all(s.converged for s in self.solutions)
+
+    @property
+    def result(self):
+        """:class:`SolveStatus` of the run: success when every output time was solved."""
+        return status_of(self.completed, "simulate", self.message, Status.STALLED, nit=len(self.solutions))
+
+    def summary(self):
+        """A few lines: the times run, the TCAs' peak temperatures, the tip at the end."""
+        n = len(self.solutions)
+        lines = [f"simulate {'completed' if self.completed else 'STOPPED'}: {n} of {len(self.t)} output times "
+                 f"to {self.t[n - 1] if n else 0:g} s" + (f"; {self.message}" if self.message else "")]
+        for k, key in enumerate(self.keys):
+            lines.append(f"  {key:<24} temperature peak {np.nanmax(self.temperatures[:n, k]):.2f} degC")
+        if n:
+            lines.append("  tip at the end [mm]: " + " ".join(f"{v * 1e3:+.4f}" for v in self.solutions[-1].tip_position))
+        return "\n".join(lines)
+
+    def figure(self):
+        """``timeseries.png``'s figure (events not marked: the scenario holds them)."""
+        from ..plotting.timeseries import save_timeseries_png
+        return save_timeseries_png(self, None)
 
     def tip_positions(self):
         """(n, 3) [m] at the solved output times."""

@@ -6,14 +6,16 @@ from typing import Optional
 import numpy as np
 
 from ..text import signed
+from ..results import ResultAPI
+from ..status import Status
 
 #: what an iteration is, per method
 ITERATIONS = {"reduced": "least-squares iterations", "ipopt": "IPOPT iterations"}
 from .targets import Target
 
 
-@dataclass
-class InverseResult:
+@dataclass(repr=False)
+class InverseResult(ResultAPI):
     """The answer to one query (SI, temperatures degC). ``temperatures`` holds every varied
     input (TCA and SMA temperatures, McKibben pressures...), each in its ``units`` entry."""
     target: Target
@@ -56,6 +58,24 @@ class InverseResult:
                 "solve_time_s": float(self.solve_time_s), "iterations": int(self.iterations),
                 "starts": int(self.starts), "method": self.method,
                 "result": None if self.result is None else self.result.as_dict()}
+
+    @property
+    def success(self):
+        """Reached, converged and verified by an independent forward solve."""
+        return bool(self.reachable and self.converged and self.verified)
+
+    @property
+    def status(self):
+        if self.success:
+            return Status.CONVERGED
+        return self.result.status if self.result is not None and not self.result.success else Status.ABOVE_TOLERANCE
+
+    def figure(self):
+        """``inverse.png``'s figure: the robot, the target and the point reached."""
+        from ..plotting import save_robot_png
+        state = "reached" if self.reachable else f"UNREACHABLE, {self.position_error * 1e3:.3g} mm away"
+        return save_robot_png(self.forward, None, title=f"inverse statics: target {state}",
+                              extra_points=[(self.target.position, "target", "magenta"), (self.position, "reached", "blue")])
 
     def save(self, directory, plot=True):
         """Write ``inverse.json``, the forward ``solution.json`` + ``arrays.npz`` and, with

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import PhysicsWarning, ScenarioError
+from ..results import ResultAPI, status_of
 from ..simulation import _failure_text
 from ..solvers.continuation import BranchFollower
 from .compare import compare_solutions
@@ -25,8 +26,8 @@ from .sweep_result import bending_angle
 GRIP_ANGLE_TOLERANCE = 15.0
 
 
-@dataclass
-class SequenceResult:
+@dataclass(repr=False)
+class SequenceResult(ResultAPI):
     """The steps' names and solutions, in order; ``frames`` (lam, solution) between steps when
     asked for (for animations)."""
     names: list
@@ -87,6 +88,26 @@ class SequenceResult:
         header = list(rows[0])
         return write_csv(path, header, [[f"{v:.10g}" if isinstance(v, float) else v
                                          for v in (row.get(k, "") for k in header)] for row in rows])
+
+    @property
+    def result(self):
+        """:class:`SolveStatus` of the sequence: success when every step converged (and, when
+        checked, agreed with shooting)."""
+        failed = [name for name, s in zip(self.names, self.solutions) if not s.converged]
+        detail = f"not converged: {', '.join(failed)}" if failed else ("" if self.agree is not False else
+                                                                       "a step disagrees with shooting")
+        return status_of(self.converged and self.agree is not False, "sequence", detail,
+                         nit=len(self.solutions), solve_time_s=self.total_time_s)
+
+    @property
+    def message(self):
+        return self.result.message
+
+    def figure(self):
+        """The robot at the last step (each step's PNG is ``save_step_pngs``')."""
+        from ..plotting import save_robot_png
+        objects = self.objects[-1].values() if self.objects else ()
+        return save_robot_png(self.solutions[-1], None, objects=objects, title=self.names[-1])
 
     def summary(self):
         state = "all converged" if self.converged else "NOT ALL CONVERGED"

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..results import ResultAPI, status_of
 from ..output import atomic_path, write_json
 
 TIP = ["tip_x [m]", "tip_y [m]", "tip_z [m]"]
@@ -23,7 +24,7 @@ LEADING = ["sample"]
 TRAILING = ["balance [-]", "message", "wall_time [s]", "worker"]
 
 
-class StudyResult:
+class StudyResult(ResultAPI):
     """``frame``: a pandas DataFrame, one row per sample in the design's order (inputs with
     units, ``converged``, ``status``, iterations, solve time, tip pose, every tension and stroke,
     requested outputs, the message of a failure); ``info``: counts, throughput, wall time and
@@ -116,6 +117,24 @@ class StudyResult:
         table = {column: [first_order_index(data[label].to_numpy(float), data[column].to_numpy(float),
                                             corrected=sampled) for label in self.inputs] for column in outputs}
         return pd.DataFrame(table, index=self.inputs)
+
+    @property
+    def result(self):
+        """:class:`SolveStatus` of the study: success when every sample converged (a failed
+        sample is a row, never absent)."""
+        info = self.info
+        return status_of(info["failed"] == 0, f"study ({info['design']})",
+                         f"{info['failed']} of {info['samples']} samples failed" if info["failed"] else "",
+                         nit=int(info["samples"]), solve_time_s=float(info["wall_time_s"]))
+
+    @property
+    def message(self):
+        return self.result.message
+
+    def figure(self):
+        """``study_workspace.png``'s figure (the tip of every converged sample)."""
+        from ..plotting.study_plots import plot_workspace
+        return plot_workspace(self, None)
 
     def summary(self):
         info = self.info

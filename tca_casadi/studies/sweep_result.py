@@ -6,11 +6,13 @@ import numpy as np
 
 from ..model.rotations import matrix_to_quaternion
 from ..output import write_csv, write_json
+from ..results import ResultAPI, status_of
+from ..status import Status
 from ..text import signed
 
 
-@dataclass
-class SweepResult:
+@dataclass(repr=False)
+class SweepResult(ResultAPI):
     """``points`` (list of SweepPoint, in branch order), ``events`` (dicts: kind, between,
     values, message), ``completed`` (reached the stop value), ``message``, ``method``
     ('natural' or 'arclength'), ``total_time_s``."""
@@ -92,6 +94,17 @@ class SweepResult:
             written.append(plot_sweep(self, directory / "sweep.png"))
             written.append(plot_sweep_robots(self, directory / "sweep_robots.png", robots))
         return written
+
+    @property
+    def result(self):
+        """:class:`SolveStatus` of the whole sweep: success when it reached the stop value."""
+        return status_of(self.completed, f"continuation ({self.method})", self.message, Status.STALLED,
+                         nit=len(self.points), solve_time_s=self.total_time_s)
+
+    def figure(self):
+        """``sweep.png``'s figure."""
+        from ..plotting.sweep_plots import plot_sweep
+        return plot_sweep(self, None)
 
     def summary(self):
         state = "completed" if self.completed else "STOPPED"
