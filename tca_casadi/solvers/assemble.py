@@ -79,13 +79,17 @@ def actuator_result(actuator, module_res, tension, length, parameter, force_scal
 
 
 def physics_warnings(robot, actuators, params):
-    """Warnings for slack actuators and what each muscle's law says of its state (a TCA in
-    compression or beyond its fit's monotone range, an SMA wire over its stress limit...)."""
+    """Warnings where slack is a surprise (a muscle that is heated, pressurised or otherwise
+    active and yet slack: its input does nothing; a passive tendon or a cool TCA going slack is
+    a state, kept in the actuator table and solution.json, not a warning) and what each muscle's
+    law says of its state (a TCA in compression or beyond its fit's monotone range, an SMA wire
+    over its stress limit...)."""
     out = []
     for actuator in robot.unknowns:
         result = actuators[actuator.key]
-        if result.slack_length:
-            out.append(PhysicsWarning("slack", f"{actuator.key} is slack (F = 0; slack length {result.slack_length * 1e3:.4g} mm)"))
+        if result.slack_length and result.heated:
+            out.append(PhysicsWarning("slack", f"{actuator.key} is active but slack: its input does nothing (F = 0; "
+                                               f"slack length {result.slack_length * 1e3:.4g} mm)"))
         if actuator.is_muscle:
             value = float(params[robot.layout[actuator.parameter]][0])
             out.extend(PhysicsWarning(kind, message) for kind, message in

@@ -146,3 +146,42 @@ def test_dotted_paths_in_examples_exist():
     names |= {"name", "gravity", "base", "solver", "materials", "tca_types"}
     used = re.findall(r"--(?:set|param) \"?([A-Za-z_][\w]*)\.", README)
     assert used and set(used) <= names, set(used) - names
+
+
+def _rendered_tables(path):
+    """``(lines outside every table that look like table rows, rows whose cell count is not
+    their header's)`` of a Markdown file, as markdown-it (CommonMark with GFM tables, the
+    parser rich and mdformat use) renders it."""
+    from markdown_it import MarkdownIt
+    text = path.read_text()
+    tokens = MarkdownIt("commonmark").enable("table").parse(text)
+    covered, uneven = set(), []
+    for k, token in enumerate(tokens):
+        if token.type == "table_open":
+            covered.update(range(*token.map))
+        if token.type == "tr_open":
+            cells = 0
+            for inner in tokens[k + 1:]:
+                if inner.type == "tr_close":
+                    break
+                cells += inner.type in ("th_open", "td_open")
+            line = text.splitlines()[token.map[0]]
+            written = line.strip().strip("|").count("|") + 1 - line.count("\\|")
+            if written != cells:
+                uneven.append(token.map[0] + 1)
+    stray, fence = [], False
+    for number, line in enumerate(text.splitlines()):
+        if line.startswith("```"):
+            fence = not fence
+        elif not fence and line.startswith("|") and number not in covered:
+            stray.append(number + 1)
+    return stray, uneven
+
+
+@pytest.mark.parametrize("name", ["README.md", "docs/control.md", "docs/contact.md"])
+def test_markdown_tables_render(name):
+    """Every table renders as a table (its separator has as many cells as its header: else
+    markdown shows the lines as text) and no row has more or fewer cells than its header."""
+    stray, uneven = _rendered_tables(ROOT / name)
+    assert not stray, f"{name}: lines {stray} are not inside a rendered table"
+    assert not uneven, f"{name}: rows at lines {uneven} have another number of cells than their header"

@@ -29,7 +29,8 @@ def test_pulling_one_tendon_bends_towards_it_and_the_opposite_goes_slack(four_te
     law = sim.robot.actuators[0].law
     assert t1.stroke + t1.displacement == pytest.approx(law.reference_length * law.compliance * t1.tension, abs=1e-12)
     assert t3.slack_length == pytest.approx(-(t3.stroke + t3.displacement), abs=1e-9)
-    assert any("body.t3 is slack" in w for w in solution.warning_texts())
+    # slack is a state of a passive tendon, not a warning (issue 35): it is in the table
+    assert not solution.warning_texts("slack") and solution.actuators["body.t3"].slack
 
 
 @pytest.mark.parametrize("path", [ROBOT, TWO_SEGMENTS], ids=["four_tendons", "two_segments"])
