@@ -2,8 +2,9 @@
 of a sequence.
 
 An object rests at its scenario pose until its ``held`` parameter is set. From then on it is
-carried: its centre is the grasp point (the mean of its holders' tips) and it turns with the
-holders' common parent (the gripper's base frame). Picking is checked: the grasp point must lie
+carried: it turns with the holders' common parent (the gripper's base frame) and its centre
+keeps, in that frame, the offset it had from the grasp point (the mean of its holders' tips)
+when it was picked, so that picking it moves it not at all. Picking is checked: the grasp point must lie
 inside the object's box when the holders close on it. When ``held`` is cleared the object is put
 down on its support plane (the height it rested at) below the grasp point, keeping only its
 rotation about the vertical. Falling and contact forces are not simulated. A contact object
@@ -61,6 +62,7 @@ class ObjectTracker:
         #: contact objects (free rigid bodies): their pose is the solution's, not tracked here
         self.free = {o.name for o in scenario.objects if o.contact}
         self._relative = {}            # name -> object rotation in the carrier's tip frame
+        self._offset = {}              # name -> its centre less the grasp point, in that frame, when picked
 
     @property
     def names(self):
@@ -109,8 +111,7 @@ class ObjectTracker:
             if name in self.free:
                 out[name] = self._solved_pose(solution, name)
             elif pose.held:
-                rotation = self.carrier_rotation(solution, name) @ self._relative[name]
-                out[name] = ObjectPose(name, pose.size, self.grasp_point(solution, name), rotation, True)
+                out[name] = self._carried(solution, name, pose)
             else:
                 out[name] = pose
         return out
@@ -132,18 +133,27 @@ class ObjectTracker:
                         f"{np.linalg.norm(local) * 1e3:.2f} mm from its centre, outside its "
                         f"{' x '.join(f'{e * 1e3:g}' for e in pose.size)} mm box (offset in the "
                         f"object's frame {np.round(local * 1e3, 2).tolist()} mm)")
-                self._relative[name] = self.carrier_rotation(solution, name).T @ pose.rotation
+                carrier = self.carrier_rotation(solution, name)
+                self._relative[name] = carrier.T @ pose.rotation
+                self._offset[name] = carrier.T @ (pose.center - grasp)
                 pose = ObjectPose(name, pose.size, pose.center, pose.rotation, True)
             if holding:
-                rotation = self.carrier_rotation(solution, name) @ self._relative[name]
-                pose = ObjectPose(name, pose.size, grasp, rotation, True)
-            elif pose.held:
-                axis = pose.rotation[:, 0]
+                pose = self._carried(solution, name, pose)
+            elif pose.held:                    # let go where the holders are now, on its support
+                carried = self._carried(solution, name, pose)
+                axis = carried.rotation[:, 0]
                 yaw = np.arctan2(axis[1], axis[0])
-                pose = ObjectPose(name, pose.size, np.array([grasp[0], grasp[1], self.support[name]]),
+                pose = ObjectPose(name, pose.size, np.array([carried.center[0], carried.center[1], self.support[name]]),
                                   _yaw_rotation(yaw), False)
             self.poses[name] = pose
         return dict(self.poses)
+
+    def _carried(self, solution, name, pose):
+        """The pose of a held object in ``solution``: turned with the carrier's frame, its
+        centre at the grasp point plus the offset it was picked with."""
+        carrier = self.carrier_rotation(solution, name)
+        centre = self.grasp_point(solution, name) + carrier @ self._offset.get(name, np.zeros(3))
+        return ObjectPose(name, pose.size, centre, carrier @ self._relative[name], True)
 
     def grip_angle(self, solution, name):
         """Angle [deg] between the holders' closing direction (tip to tip) and the object's

@@ -111,3 +111,15 @@ def test_pick_and_place_command_checks_every_step_and_moves_the_object(tmp_path,
     checks = json.loads((tmp_path / "sequence_check.json").read_text())
     assert all(report["agree"] for report in checks.values()) and len(checks) == 4
     assert len(list(tmp_path.glob("step_*.png"))) == 4 and (tmp_path / "sequence.gif").exists()
+
+
+def test_picking_and_putting_down_move_the_object_not_at_all():
+    """The pick-and-place: the bar held in (d) is where it rested (the grasp keeps its offset
+    from the grasp point: it was 0.3 mm below the rest pose when the grasp point was taken as
+    the centre), rises with the base's 10 mm lift in (e), and is let go at its support height."""
+    result = run_sequence(Simulation.from_file(SCENARIOS / "arm_pick_and_place.yaml"))
+    bar = [step["bar"] for step in result.objects]
+    assert not bar[2].held and bar[3].held and not bar[6].held
+    np.testing.assert_allclose(bar[3].center, bar[2].center, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(bar[4].center - bar[3].center, [0, 0, 0.010], rtol=0, atol=1e-4)
+    assert bar[6].center[2] == bar[0].center[2] and bar[6].center[0] > 0.015
