@@ -589,7 +589,8 @@ def _simulate(args):
                    write_json(output / "simulation.json", timed.report(series))]
         if not args.no_plot and series.solutions:
             from .plotting.timeseries import save_timeseries_png
-            written.append(save_timeseries_png(series, output / "timeseries.png", [e.at for e in sim.scenario.timeline]))
+            from .plotting.timeseries import event_labels
+            written.append(save_timeseries_png(series, output / "timeseries.png", event_labels(sim.scenario.timeline)))
         print(timed.summary(series))
         if not args.no_animation and series.solutions:
             from .plotting.animation import save_time_animation

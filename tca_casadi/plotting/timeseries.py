@@ -1,41 +1,92 @@
-"""``timeseries.png`` of ``simulate``: temperatures, electrical powers, tensions and the tip's
-displacement against time, events marked."""
+"""``timeseries.png`` of ``simulate``: temperatures, electrical powers (where a TCA is heated
+electrically), tensions, the tip's displacement and, for a dynamic run, its energies against
+time; named events marked. One colour and line style per actuator in every panel."""
 import numpy as np
 
 from .robot3d import _pyplot, finish
 from .sweep_plots import line_style
 
+#: an event's label is clipped to this many characters
+EVENT_LABEL = 40
+
+
+def actuator_styles(series):
+    """``{actuator key: plot keywords}``: one colour and line style per actuator of the run (its
+    index among the solution's actuators, then any other heated key), the same in every panel."""
+    n = len(series.solutions)
+    keys = list(series.solutions[0].actuators) if n else []
+    keys += [key for key in series.keys if key not in keys]
+    return {key: dict(line_style(k, n), color=f"C{k % 10}") for k, key in enumerate(keys)}
+
+
+def event_labels(timeline):
+    """``[(t [s], label)]`` of a scenario's timeline events: what each sets (the first path and
+    value, and how many more)."""
+    out = []
+    for event in timeline:
+        items = list(event.set.items())
+        text = f"{items[0][0]} = {items[0][1]}" if items else "event"
+        if len(items) > 1:
+            text += f" (+{len(items) - 1})"
+        out.append((float(event.at), text if len(text) <= EVENT_LABEL else text[:EVENT_LABEL - 3] + "..."))
+    return out
+
 
 def save_timeseries_png(series, path, events=()):
-    """Four panels against time [s] (the solved output times); dotted red lines at ``events``
-    [s]. Saves a PNG at ``path`` and returns it."""
+    """The panels against time [s] (the solved output times); ``events``: times [s] or ``(t,
+    label)`` pairs, drawn as dotted lines and named at the top panel. Saves a PNG at ``path``
+    (None: returns the figure)."""
     plt = _pyplot()
     n = len(series.solutions)
     t = series.t[:n]
-    fig, axes = plt.subplots(4, 1, figsize=(9, 9), sharex=True)
+    styles = actuator_styles(series)
+    heated = [k for k, key in enumerate(series.keys) if not np.all(np.isnan(series.powers[:n, k]))]
+    dynamic = getattr(series, "energies", None) is not None and len(series.energies)
+    panels = ["temperature"] + (["power"] if heated else []) + ["tension", "tip"] + (["energy"] if dynamic else [])
+    fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.2 * len(panels) + 0.6), sharex=True)
+    ax = dict(zip(panels, axes))
     for k, key in enumerate(series.keys):
-        axes[0].plot(t, series.temperatures[:n, k], label=key, **line_style(k, n))
-        if not np.all(np.isnan(series.powers[:n, k])):
-            axes[1].plot(t, series.powers[:n, k] * 1e3, label=key, drawstyle="steps-post", **line_style(k, n))
-    for k, key in enumerate(series.solutions[0].actuators if n else []):
-        axes[2].plot(t, [s.actuators[key].tension * 1e3 for s in series.solutions], label=key, **line_style(k, n))
+        ax["temperature"].plot(t, series.temperatures[:n, k], label=key, **styles[key])
+        if k in heated:
+            ax["power"].plot(t, series.powers[:n, k] * 1e3, label=key, drawstyle="steps-post", **styles[key])
+    for key in (series.solutions[0].actuators if n else []):
+        ax["tension"].plot(t, [s.actuators[key].tension * 1e3 for s in series.solutions], label=key, **styles[key])
     if n:
         move = (series.tip_positions() - series.tip_positions()[0]) * 1e3
         for axis, name in enumerate("xyz"):
-            axes[3].plot(t, move[:, axis], label=f"tip {name}", **line_style(axis, n))
-        axes[3].plot(t, np.linalg.norm(move, axis=1), color="black", label="|tip displacement|", **line_style(3, n))
-    if not axes[1].get_lines():
-        axes[1].text(0.5, 0.5, "no electrically heated TCA (temperatures set)", ha="center", va="center",
-                     transform=axes[1].transAxes, fontsize=9, color="0.4")
-    labels = ["temperature [degC]", "electrical power [mW]", "tension [mN]", "tip displacement [mm]"]
-    for ax, label in zip(axes, labels):
-        ax.set_ylabel(label)
-        ax.grid(True, alpha=0.3)
-        if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-        for at in events:
-            ax.axvline(at, color="tab:red", linestyle=":", linewidth=1)
+            ax["tip"].plot(t, move[:, axis], label=f"tip {name}", **line_style(axis, n))
+        ax["tip"].plot(t, np.linalg.norm(move, axis=1), color="black", label="|tip displacement|", **line_style(3, n))
+    if dynamic:
+        _energies(ax["energy"], t, series.energies[:n], n)
+    labels = {"temperature": "temperature [degC]", "power": "electrical power [mW]", "tension": "tension [mN]",
+              "tip": "tip displacement [mm]", "energy": "energy [mJ]"}
+    named = [(e, None) if np.isscalar(e) else e for e in events]
+    for name, axis in ax.items():
+        axis.set_ylabel(labels[name])
+        axis.grid(True, alpha=0.3)
+        if axis.get_legend_handles_labels()[0]:
+            axis.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        for at, _ in named:
+            axis.axvline(at, color="tab:red", linestyle=":", linewidth=1)
+    for at, label in named:
+        if label:
+            axes[0].annotate(label, (at, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -2),
+                             textcoords="offset points", rotation=90, va="top", ha="left", fontsize=6,
+                             color="tab:red")
     axes[-1].set_xlabel("time [s]")
     state = "" if series.completed else f"  (stopped: {series.message[:60]})"
     axes[0].set_title(f"simulate{state}", fontsize=10)
     return finish(plt, fig, path, dpi=110)
+
+
+def _energies(axis, t, energies, n):
+    """A dynamic run's energy account [mJ]: kinetic, elastic, gravitational (from its start),
+    the actuators' and loads' work, what damping dissipated and the balance (zero up to the
+    time discretisation)."""
+    from ..studies.motion import ENERGY_COLUMNS
+    shown = energies * 1e3
+    shown[:, ENERGY_COLUMNS.index("gravitational_energy")] -= shown[0, ENERGY_COLUMNS.index("gravitational_energy")]
+    for k, name in enumerate(ENERGY_COLUMNS):
+        style = dict(line_style(k, n), color="black") if name == "energy_balance" else line_style(k, n)
+        axis.plot(t, shown[:, k], label=name.replace("_", " ") + (" (from t0)" if name.startswith("grav") else ""),
+                  **style)

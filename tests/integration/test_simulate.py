@@ -208,7 +208,7 @@ def test_a_long_run_says_how_long_it_will_take(tmp_path):
     import sys
     import time
     process = subprocess.Popen([sys.executable, "-m", "tca_casadi.cli", "simulate", BENDING,
-                                "--set", "dynamics={enabled: true}", "--duration", "400",
+                                "--set", "dynamics={enabled: true}", "--set", "solver.jit=false", "--duration", "400",
                                 "--dt", "0.002", "-o", str(tmp_path), "--no-plot", "--no-animation"],
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline, line = time.monotonic() + 120, ""
