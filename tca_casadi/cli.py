@@ -36,6 +36,19 @@ def _output_arguments(parser, default, plots):
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
+def _view_arguments(parser):
+    """``--view AZIMUTH,ELEVATION`` and ``--projection xy|xz|yz`` of the robot drawings."""
+    parser.add_argument("--view", default=None, metavar="AZ,EL",
+                        help="camera of the robot drawings: azimuth,elevation [deg], e.g. -60,20")
+    parser.add_argument("--projection", default=None, choices=["xy", "xz", "yz"],
+                        help="draw the robot projected onto a coordinate plane (orthographic) instead")
+
+
+def _view(args):
+    from .plotting.robot3d import view_of
+    return view_of(getattr(args, "view", None), getattr(args, "projection", None))
+
+
 def build_parser():
     parser = argparse.ArgumentParser(
         prog="tca-casadi",
@@ -53,6 +66,7 @@ def build_parser():
                        help="output directory (default: results/<scenario name>)")
     solve.add_argument("--json", action="store_true", help="print solution.json to stdout")
     solve.add_argument("--no-plot", action="store_true", help="do not draw robot.png")
+    _view_arguments(solve)
     solve.add_argument("--vtk", action="store_true", help="also VTK files for ParaView: vtk_NNNN_rods.vtu, _actuators.vtu, _surfaces.vtu, solution.pvd (the frames in time) and solution_names.json")
     solve.add_argument("--method", choices=["collocation", "shooting"], default=None,
                        help="solver (default: the scenario's, collocation)")
@@ -115,6 +129,7 @@ def build_parser():
     sequence.add_argument("--frames", type=int, default=6,
                           help="intermediate frames per transition in the animation (default 6)")
     sequence.add_argument("--no-animation", action="store_true", help="no GIF/MP4")
+    _view_arguments(sequence)
     sequence.add_argument("--vtk", action="store_true", help="also VTK files for ParaView (a frame per step): vtk_NNNN_rods.vtu, _actuators.vtu, _surfaces.vtu, sequence.pvd (the frames in time) and sequence_names.json")
     sequence.add_argument("--check", action="store_true",
                           help="also solve every step by shooting and compare (as `check` does); "
@@ -128,6 +143,7 @@ def build_parser():
                           help="output directory (default: results/<scenario name>/simulate)")
     simulate.add_argument("--duration", default=None, help="[s] (units allowed: '30 s'); default the scenario's")
     simulate.add_argument("--dt", default="0.1", help="output step [s] (default 0.1); with dynamics, the time step")
+    _view_arguments(simulate)
     simulate.add_argument("--vtk", action="store_true", help="also VTK files for ParaView (a frame per output time): vtk_NNNN_rods.vtu, _actuators.vtu, _surfaces.vtu, simulate.pvd (the frames in time) and simulate_names.json")
     simulate.add_argument("--timeline", type=Path, default=None, metavar="YAML",
                           help="a file with a timeline (and optionally a duration) that replaces the scenario's, "
@@ -347,6 +363,7 @@ def _solve(args):
     from .simulation import Simulation
     sim = Simulation.from_file(Path(args.scenario), args.overrides, method=args.method, allow_code=args.allow_code)
     vtk, vtk_stale = _vtk_files(args, "solution")
+    view = _view(args)
     with _results(args, sim, "solve", ["solution.json", "arrays.npz", "robot.png"] + vtk,
                   stale=(["robot.png"] if args.no_plot else []) + vtk_stale) as run:
         solution = sim.solve(warn=False)          # its warnings are in the summary and solution.json
@@ -355,7 +372,7 @@ def _solve(args):
         objects = object_poses(sim.scenario, sim.robot, solution)
         if not args.no_plot:
             from .plotting import save_robot_png
-            written.append(save_robot_png(solution, run.staging / "robot.png", objects=objects))
+            written.append(save_robot_png(solution, run.staging / "robot.png", objects=objects, **view))
         if args.vtk:
             from .vtk_files import write_series
             written += write_series([(0.0, solution, objects)], run.staging, "solution")
@@ -441,17 +458,18 @@ def _sequence(args):
     stale = ["step_*.png"] + (["sequence.gif", "sequence.mp4"] if args.no_animation else []) + \
         ([] if args.check else ["sequence_check.json"])
     vtk, vtk_stale = _vtk_files(args, "sequence")
+    view = _view(args)
     with _results(args, sim, "sequence", ["sequence.csv", "sequence_check.json", "sequence.gif", "sequence.mp4"] + vtk,
                   stale=stale + vtk_stale, default="sequence") as run:
         result = _with_progress(lambda progress: run_sequence(sim, frames_per_step=frames, progress=progress,
                                                               check=args.check), "steps", args.quiet)
         output = run.staging
-        written = [result.to_csv(output / "sequence.csv"), *save_step_pngs(result, output)]
+        written = [result.to_csv(output / "sequence.csv"), *save_step_pngs(result, output, **view)]
         if args.check:
             reports = {name: report.to_dict() for name, report in zip(result.names, result.checks)}
             written.append(write_json(output / "sequence_check.json", reports))
         if not args.no_animation:
-            written += _with_progress(lambda progress: save_animation(result, output, progress=progress),
+            written += _with_progress(lambda progress: save_animation(result, output, progress=progress, **view),
                                       "animation", args.quiet)
         if args.vtk:
             from .vtk_files import write_series
@@ -579,6 +597,7 @@ def _simulate(args):
     plots = ["timeseries.png"]
     movies = ["simulate.gif", "simulate.mp4"]
     vtk, vtk_stale = _vtk_files(args, "simulate")
+    view = _view(args)
     frames = []
     with _results(args, sim, "simulate", ["timeseries.csv", "simulation.json"] + plots + movies + vtk,
                   stale=(plots if args.no_plot else []) + (movies if args.no_animation else []) + vtk_stale,
@@ -596,7 +615,8 @@ def _simulate(args):
             from .plotting.animation import save_time_animation
             moving = {"fps": 20, "max_frames": 200} if sim.scenario.dynamics.enabled else {}   # motion: finer in time
             paths, speed_up = _with_progress(lambda progress: save_time_animation(series, output, progress=progress,
-                                                                                  **moving), "animation", quiet=args.quiet)
+                                                                                  **moving, **view), "animation",
+                                             quiet=args.quiet)
             written += paths
             print(f"animation at {'real time' if speed_up == 1 else f'{speed_up}x real time'}")
         if args.vtk and series.solutions:

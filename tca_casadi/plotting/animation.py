@@ -6,11 +6,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..output import atomic_path, save_figure
-from .robot3d import _pyplot, draw_robot, set_equal_limits
+from ..output import atomic_path
+from .robot3d import _pyplot, draw_robot, finish, set_equal_limits
 
 
-def save_step_pngs(result, directory):
+def save_step_pngs(result, directory, **view):
     """``step_XX_NAME.png`` for every step, drawn as the paper draws the robot."""
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
@@ -21,17 +21,14 @@ def save_step_pngs(result, directory):
         title = f"({chr(97 + index) if index < 26 else index}) {name}"
         if result.stage and result.stage[index]:
             title += f"\n[{result.stage[index]}, not a TCA]"
-        ax = draw_robot(solution, title=title, objects=objects)
+        ax = draw_robot(solution, title=title, objects=objects, **view)
         _fix_limits(ax, _limits(result))
         path = directory / f"step_{index:02d}_{_slug(name)}.png"
-        ax.figure.tight_layout()
-        save_figure(ax.figure, path, dpi=110, bbox_inches="tight", pad_inches=0.15)
-        plt.close(ax.figure)
-        paths.append(path)
+        paths.append(finish(plt, ax.figure, path, dpi=110, bbox_inches="tight", pad_inches=0.15))
     return paths
 
 
-def save_animation(result, directory, fps=8, progress=None):
+def save_animation(result, directory, fps=8, progress=None, **view):
     """``sequence.gif`` (and ``sequence.mp4`` when ffmpeg is on the PATH): every transition
     frame and every step. Returns the paths written."""
     directory = Path(directory)
@@ -50,7 +47,7 @@ def save_animation(result, directory, fps=8, progress=None):
     def draw(index):
         ax.clear()
         title, solution, objects = frames[index]
-        draw_robot(solution, ax=ax, title=title, objects=objects.values())
+        draw_robot(solution, ax=ax, title=title, objects=objects.values(), **view)
         _fix_limits(ax, limits)
         if progress is not None:
             progress((index + 1) / len(frames), title)
@@ -95,7 +92,7 @@ def frame_indices(t, fps, speed_up):
     return np.append(indices, len(t) - 1) if indices[-1] != len(t) - 1 else indices
 
 
-def save_time_animation(series, directory, fps=10, max_frames=150, progress=None):
+def save_time_animation(series, directory, fps=10, max_frames=150, progress=None, **view):
     """``simulate.gif`` (and ``simulate.mp4`` when ffmpeg is on the PATH) of a ``simulate``
     :class:`~tca_casadi.studies.heating.TimeSeries`: the robot at the solved output times, at
     real time or the smallest speed-up of :data:`SPEED_UPS` that fits ``max_frames`` frames,
@@ -105,26 +102,28 @@ def save_time_animation(series, directory, fps=10, max_frames=150, progress=None
     heated = [j for j in range(len(series.keys)) if not np.all(np.isnan(series.powers[:n, j]))]
     return animate_in_time(series.t[:n], series.solutions, series.keys, series.temperatures[:n], heated,
                            Path(directory) / "simulate", fps=fps, max_frames=max_frames, progress=progress,
-                           objects=series.objects)
+                           objects=series.objects, **view)
 
 
-def save_plan_animation(plan, solutions, directory, fps=10, max_frames=150, progress=None):
+def save_plan_animation(plan, solutions, directory, fps=10, max_frames=150, progress=None, **view):
     """``plan.gif`` (and ``plan.mp4`` with ffmpeg) of a :class:`~tca_casadi.control.plan.PlanResult`:
     the robot at every node's equilibrium (``solutions``, one per node) as
     :func:`save_time_animation` draws a run, with the target marked. Returns ``(paths, speed_up)``."""
     marks = [(plan.target, "target", "tab:green")]
     return animate_in_time(plan.t, solutions, plan.keys, plan.temperatures, list(range(len(plan.keys))),
-                           Path(directory) / "plan", fps=fps, max_frames=max_frames, progress=progress, marks=marks)
+                           Path(directory) / "plan", fps=fps, max_frames=max_frames, progress=progress, marks=marks,
+                           **view)
 
 
 def animate_in_time(t, solutions, keys, temperatures, heated, stem, fps=10, max_frames=150, progress=None,
-                    objects=(), marks=()):
+                    objects=(), marks=(), view=None, projection=None):
     """A GIF (and MP4) at ``stem`` of the robot at times ``t`` (n,) [s] (``solutions``, one per
     time; ``objects``: per time, the object poses), at real time or the smallest speed-up of
     :data:`SPEED_UPS` that fits ``max_frames`` frames, with a clock and the temperatures
     (``temperatures`` (n, m) [degC] of ``keys``) of the TCAs ``heated`` (indices) that are warm;
-    ``marks``: ``(position (3,) [m], label, color)`` drawn on every frame. Returns ``(paths,
-    speed_up)``."""
+    ``marks``: ``(position (3,) [m], label, color)`` drawn on every frame; ``view``,
+    ``projection``: the camera (:func:`~tca_casadi.plotting.robot3d.apply_view`); the TCAs'
+    temperature colours on one scale for the whole run. Returns ``(paths, speed_up)``."""
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
     t = np.asarray(t, float)
@@ -136,6 +135,8 @@ def animate_in_time(t, solutions, keys, temperatures, heated, stem, fps=10, max_
     points += [np.asarray(position, float).reshape(3, 1) for position, _, _ in marks]
     every = np.hstack(points) * 1e3
     limits = every.min(axis=1), every.max(axis=1)
+    from .robot3d import temperature_norm
+    norm = max((temperature_norm(s) for s in solutions), key=lambda n: n.vmax)
     plt = _pyplot()
     fig = plt.figure(figsize=(5.6, 5.6))
     ax = fig.add_subplot(projection="3d")
@@ -148,7 +149,8 @@ def animate_in_time(t, solutions, keys, temperatures, heated, stem, fps=10, max_
                 if temperatures[k, j] > ambient + 0.5][:6]          # the TCAs that are warm now
         text = "\n".join("  ".join(warm[i:i + 3]) for i in range(0, len(warm), 3))
         draw_robot(solutions[k], ax=ax, objects=objects[k].values() if objects else (), extra_points=marks,
-                   title=f"t = {t[k]:6.1f} s   ({pace})" + (f"\n{text}" if text else ""))
+                   title=f"t = {t[k]:6.1f} s   ({pace})" + (f"\n{text}" if text else ""), view=view,
+                   projection=projection, norm=norm)
         _fix_limits(ax, limits)
         if progress is not None:
             progress((frame + 1) / len(frames), f"frame {frame + 1}/{len(frames)}")

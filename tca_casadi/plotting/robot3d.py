@@ -11,7 +11,8 @@ def finish(plt, fig, path, dpi=110, **options):
     """Lay out ``fig``, save it atomically at ``path``, close it; return ``path``. ``path``
     None: return the open figure instead (what a result's ``plot()`` hands over)."""
     from ..output import save_figure
-    fig.tight_layout()
+    if fig.get_layout_engine() is None:            # (a constrained figure lays itself out)
+        fig.tight_layout()
     if path is None:
         return fig
     save_figure(fig, path, dpi=dpi, **options)
@@ -32,29 +33,98 @@ def _has_display():
     return bool(os.environ.get("DISPLAY"))
 
 
-def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_points=(), objects=()):
-    """Draw ``solution`` on a 3D axes (created when ``ax`` is None). Lengths in mm.
+#: TCA temperatures are coloured on this map from TEMPERATURE_RANGE[0] to at least [1] [degC]
+TEMPERATURE_MAP, TEMPERATURE_RANGE = "plasma", (20.0, 100.0)
+#: ``--projection``: (elevation, azimuth) of an orthographic view along the third axis, and that axis
+PROJECTIONS = {"xy": (90.0, -90.0, "z"), "xz": (0.0, -90.0, "y"), "yz": (0.0, 0.0, "x")}
 
-    Centerline thick black; cross-sections as translucent blue outlines (rectangles as
-    rectangles); a thin grey line along each body's material x axis, so that twist shows;
-    actuators coloured by kind (dotted when slack); point masses as black dots and point forces as
-    arrows; ``extra_points``: iterable of ``(position (3,) [m], label, color)`` to mark (e.g. a
-    target), drawn on top; ``objects``: :class:`~tca_casadi.studies.objects.ObjectPose` boxes.
+
+def view_of(view=None, projection=None):
+    """``{"view": (azimuth, elevation) or None, "projection": name or None}`` checked: a
+    projection is one of :data:`PROJECTIONS`; a view two finite angles [deg]."""
+    from ..errors import ScenarioError
+    if projection is not None and projection not in PROJECTIONS:
+        raise ScenarioError(f"--projection {projection!r}: one of {', '.join(PROJECTIONS)}")
+    if view is not None:
+        try:
+            azimuth, elevation = (float(v) for v in (view.split(",") if isinstance(view, str) else view))
+        except (TypeError, ValueError):
+            raise ScenarioError(f"--view {view!r}: give AZIMUTH,ELEVATION in degrees, e.g. --view -60,20") from None
+        if not (np.isfinite(azimuth) and np.isfinite(elevation)):
+            raise ScenarioError(f"--view {view!r}: the angles must be finite")
+        view = (azimuth, elevation)
+    return {"view": view, "projection": projection}
+
+
+def apply_view(ax, view=None, projection=None):
+    """Point the camera of a 3-D axes: an orthographic projection onto a coordinate plane (the
+    axis along the view hidden), or a perspective from ``(azimuth, elevation)`` [deg]."""
+    if projection is not None:
+        elevation, azimuth, hidden = PROJECTIONS[projection]
+        ax.set_proj_type("ortho")
+        ax.view_init(elev=elevation, azim=azimuth)
+        getattr(ax, f"set_{hidden}ticks")([])
+        getattr(ax, f"set_{hidden}label")("")
+    elif view is not None:
+        ax.view_init(elev=view[1], azim=view[0])
+
+
+def temperature_colours():
+    """The TCAs' temperature colour map: :data:`TEMPERATURE_MAP` without its palest 15 % (dark
+    blue-violet when cool to orange when hot, all visible on white)."""
+    import matplotlib
+    from matplotlib.colors import ListedColormap
+    return ListedColormap(matplotlib.colormaps[TEMPERATURE_MAP](np.linspace(0.0, 0.85, 256)), name="tca_temperature")
+
+
+def temperature_norm(solution):
+    """The colour scale of the TCAs' temperatures: from :data:`TEMPERATURE_RANGE`'s low end to
+    its high end or the hottest TCA, whichever is higher."""
+    from matplotlib.colors import Normalize
+    hottest = max((a.temperature for a in solution.actuators.values() if a.kind == "tca" and a.temperature is not None),
+                  default=TEMPERATURE_RANGE[1])
+    return Normalize(TEMPERATURE_RANGE[0], max(TEMPERATURE_RANGE[1], hottest))
+
+
+def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_points=(), objects=(), view=None,
+               projection=None, norm=None):
+    """Draw ``solution`` on a 3D axes (created when ``ax`` is None, with a colour bar of the TCAs'
+    temperatures and the legend beside the drawing). Lengths in mm.
+
+    Centerline thick black, the joints between modules as white rings; cross-sections as
+    translucent blue outlines (rectangles as rectangles); a thin grey line along each body's
+    material x axis, so that twist shows; TCAs coloured by their temperature (:data:`TEMPERATURE_MAP`,
+    ``norm`` or :func:`temperature_norm`), other actuators by kind (dotted when slack); point
+    masses as black dots and point forces as arrows; ``extra_points``: iterable of ``(position
+    (3,) [m], label, color)`` to mark (e.g. a target), drawn on top; ``objects``:
+    :class:`~tca_casadi.studies.objects.ObjectPose` boxes; ``view``, ``projection``:
+    :func:`apply_view`.
     """
+    import matplotlib
     plt = _pyplot()
-    if ax is None:
-        fig = plt.figure(figsize=(6.4, 6.4))
+    own = ax is None
+    if own:
+        fig = plt.figure(figsize=(8.4, 6.4), layout="constrained")
         ax = fig.add_subplot(projection="3d")
+    norm = norm or temperature_norm(solution)
+    colour_map = temperature_colours()
     everything = [_draw_module(ax, module, sections_per_module) for module in solution.modules]
     everything = [points for group in everything for points in group]
+    joints = np.column_stack([m.p[:, 0] for m in solution.modules[1:]]) * 1e3 if len(solution.modules) > 1 else None
+    if joints is not None:
+        ax.scatter(*joints, s=36, facecolors="white", edgecolors="black", linewidths=1.2, depthshade=False, zorder=8,
+                   label="joints between modules")
     for key, actuator in solution.actuators.items():
         kind = "tendon" if actuator.kind == "tendon" else ("heated" if actuator.heated else "passive")
         force = "slack" if actuator.slack else (f"{actuator.tension:.3g} N" if abs(actuator.tension) >= 1
                                                  else f"{actuator.tension * 1e3:.2f} mN")
         word = {"heated": "pressurised" if actuator.pressure is not None else (
             "active" if actuator.input is not None else "heated")}.get(kind, kind)
-        ax.plot(*(_smooth(actuator.path) * 1e3), color=COLORS[kind], linewidth=1.6,
-                linestyle=":" if actuator.slack else "-", label=f"{key} ({word}, {force})")
+        by_temperature = actuator.kind == "tca" and actuator.temperature is not None
+        colour = colour_map(norm(actuator.temperature)) if by_temperature else COLORS[kind]
+        state = f"{actuator.temperature:.0f} degC" if by_temperature else word
+        ax.plot(*(_smooth(actuator.path) * 1e3), color=colour, linewidth=1.8,
+                linestyle=":" if actuator.slack else "-", label=f"{key} ({state}, {force})")
     everything += _draw_loads(ax, solution.loads, np.hstack(everything))
     everything += _draw_contacts(ax, solution.contacts, np.hstack(everything))
     extent = np.hstack(everything)
@@ -75,10 +145,19 @@ def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_point
         everything.append(point.reshape(3, 1))
     _equal_axes(ax, np.hstack(everything))
     style_axes(ax)
+    apply_view(ax, view, projection)
     state = "" if solution.converged else "  (NOT CONVERGED)"
     ax.set_title(f"{title or solution.scenario_name}{state}", fontsize=10)
+    if own and any(a.kind == "tca" and a.temperature is not None for a in solution.actuators.values()):
+        bar = ax.figure.colorbar(matplotlib.cm.ScalarMappable(norm=norm, cmap=colour_map), ax=ax, shrink=0.55,
+                                 pad=0.02, location="left")
+        bar.set_label("TCA temperature [degC]", fontsize=8)
+        bar.ax.tick_params(labelsize=7)
     if ax.get_legend_handles_labels()[0]:
-        ax.legend(loc="upper left", fontsize=7)
+        if own:                              # beside the drawing, never over it, inside the figure
+            ax.figure.legend(*ax.get_legend_handles_labels(), loc="outside right upper", fontsize=7)
+        else:
+            ax.legend(loc="upper left", fontsize=6)
     return ax
 
 
