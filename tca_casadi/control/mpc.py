@@ -128,11 +128,11 @@ class ClosedLoopResult(ResultAPI, HeatingRecord):
                  ("  target [mm]: " if self.path is None else
                   f"  path {Path(self.path).name} (RMS distance {report['rms_error_m'] * 1e3:.4g} mm), to [mm]: ")
                  + " ".join(f"{v * 1e3:+.4f}" for v in self.target)
-                 + f"; tip at the end [mm]: " + " ".join(f"{v * 1e3:+.4f}" for v in self.tips[-1]),
+                 + "; tip at the end [mm]: " + " ".join(f"{v * 1e3:+.4f}" for v in self.tips[-1]),
                  f"  controller solve time per period: median {report['solve_time_median_s'] * 1e3:.0f} ms, "
                  f"max {report['solve_time_max_s'] * 1e3:.0f} ms ({report['solve_time_fraction_of_period']:.0%} of the "
                  f"{self.settings['period_s']:g} s period)",
-                 f"  mismatch estimate at the end (disturbance + integral) [mm]: " + " ".join(f"{v * 1e3:+.4f}" for v in self.offsets[-1])
+                 "  mismatch estimate at the end (disturbance + integral) [mm]: " + " ".join(f"{v * 1e3:+.4f}" for v in self.offsets[-1])
                  + f"; electrical energy {self.energy_J:.4g} J"]
         if self.plant_overrides:
             lines.append("  plant differs from the model: " + ", ".join(self.plant_overrides))

@@ -1,5 +1,8 @@
-"""3D drawing of a solved robot, as the paper draws it: centerline thick black, heated TCAs (and
-active muscles) red, passive ones green, tendons orange, cross-sections blue; objects as grey boxes."""
+"""3D drawing of a solved robot, as the paper draws it: centerline thick black, cross-sections
+blue, TCAs coloured by their temperature (a colour bar), other muscles red when active and green
+when not, tendons orange; objects as grey boxes."""
+import functools
+
 import numpy as np
 
 COLORS = {"heated": "#d62728", "passive": "#2ca02c", "tendon": "#ff7f0e",
@@ -69,6 +72,7 @@ def apply_view(ax, view=None, projection=None):
         ax.view_init(elev=view[1], azim=view[0])
 
 
+@functools.lru_cache(maxsize=1)
 def temperature_colours():
     """The TCAs' temperature colour map: :data:`TEMPERATURE_MAP` without its palest 15 % (dark
     blue-violet when cool to orange when hot, all visible on white)."""

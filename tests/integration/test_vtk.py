@@ -6,7 +6,6 @@ import json
 
 import meshio
 import numpy as np
-import pytest
 from numpy.testing import assert_allclose
 
 from conftest import SCENARIOS
