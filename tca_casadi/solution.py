@@ -13,7 +13,7 @@ from .results import ResultAPI
 from .errors import SolverError
 from .model.rotations import matrix_to_quaternion
 from .status import SolveStatus
-from .text import signed
+from .text import signed, unit_text
 
 
 @dataclass
@@ -465,7 +465,7 @@ class Solution(ResultAPI):
                            for name, _, scale in extra)
             lines.append(f"  {key:<22}{temp}{pull}{a.tension * 1e3:11.4f}{a.stroke * 1e3:13.4f}{free}{slack}{more}")
         if self.clearance:
-            lines.append(f"  {'contact':<22}{'s [mm]':>9}{'f_n [mN]':>11}{'|f_t| [mN]':>11}{'gap [um]':>10}"
+            lines.append(f"  {'contact':<22}{'s [mm]':>9}{'f_n [mN]':>11}{'|f_t| [mN]':>11}{'gap [' + unit_text('um') + ']':>10}"
                          "  position [mm]")
             for c in self.contacts:
                 where = " ".join(signed(x * 1e3) for x in c.position)

@@ -6,9 +6,10 @@ Plain numbers are SI (m, N, Pa, kg, rad), temperatures are degC. A string carrie
 import math
 import re
 
+import numpy as np
 import pint
 
-from .text import clip, shorten  # noqa: F401  (messages cut long values alike)
+from .text import clip, shorten, unit_text  # noqa: F401  (messages cut long values alike)
 
 ureg = pint.UnitRegistry()
 
@@ -135,3 +136,59 @@ def _parse_string(text, si_unit, name):
                          f"{si_unit or 'a plain number'})") from None
     except Exception:   # pint's parser raises many kinds (ZeroDivisionError, TokenError, ...)
         raise ValueError(f"cannot read the unit {shorten(unit)} in {shorten(text)}") from None
+
+
+# ---------------------------------------------------------------------- showing quantities
+#: per kind, the units a value may be shown in when the user gave none, largest first: a value is
+#: shown in the first unit where its magnitude is at least 1 (else the last)
+READABLE = {
+    "length": ("m", "mm", "um"),
+    "pressure": ("GPa", "MPa", "kPa", "Pa"),
+    "force": ("N", "mN"),
+    "moment": ("N*m", "N*mm"),
+    "mass": ("kg", "g", "mg"),
+    "time": ("s", "ms"),
+    "power": ("W", "mW"),
+    "current": ("A", "mA"),
+    "voltage": ("V", "mV"),
+}
+
+
+def unit_given(value):
+    """The unit written in a quantity string (``"6 mm"`` -> ``"mm"``); None for a plain number,
+    a bare numeric string or anything that is not a quantity."""
+    if not isinstance(value, str):
+        return None
+    match = _NUMBER_AND_UNIT.fullmatch(value.strip()[:MAX_TEXT])
+    return match.group(2).strip() or None if match else None
+
+
+def readable_unit(kind, values):
+    """The unit of :data:`READABLE` that shows ``values`` (SI) with a magnitude of 1 or more
+    (the largest |value| decides); the SI unit for kinds without a choice or no finite value."""
+    choices = READABLE.get(kind)
+    finite = np.abs(np.asarray(values, float).ravel())
+    finite = finite[np.isfinite(finite) & (finite > 0)]
+    if not choices or finite.size == 0:
+        return KINDS[kind][0]
+    largest = float(finite.max())
+    for unit in choices:
+        if largest * ureg.Quantity(1.0, KINDS[kind][0]).to(unit).magnitude >= 1.0 - 1e-12:
+            return unit
+    return choices[-1]
+
+
+def in_unit(value, kind, unit):
+    """``value`` (SI, scalar or array) expressed in ``unit`` (a pint unit string)."""
+    si = KINDS[kind][0]
+    if not unit or unit == si or kind == "temperature":
+        return value
+    return ureg.Quantity(1.0, si).to(unit).magnitude * np.asarray(value, float) if np.ndim(value) \
+        else float(ureg.Quantity(float(value), si).to(unit).magnitude)
+
+
+def show(value, kind, unit=None, digits=6, plain=None):
+    """``value`` (SI) as ``"0.51958 mm"``: in ``unit`` if given, else in :func:`readable_unit`."""
+    unit = unit or readable_unit(kind, [value])
+    written = unit_text(unit, plain) if unit != KINDS[kind][0] else UNIT_OF.get(kind, unit)
+    return f"{in_unit(value, kind, unit):.{digits}g} {'' if written == '-' else written}".rstrip()

@@ -7,22 +7,21 @@ from pathlib import Path
 import numpy as np
 
 from ..output import atomic_path
-from .robot3d import _pyplot, draw_robot, finish, set_equal_limits
+from .robot3d import _pyplot, draw_robot, finish
 
 
 def save_step_pngs(result, directory, **view):
     """``step_XX_NAME.png`` for every step, drawn as the paper draws the robot."""
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
-    paths = []
+    paths, limits = [], _limits(result)
     for index, (name, solution) in enumerate(zip(result.names, result.solutions)):
         plt = _pyplot()
         objects = result.objects[index].values() if result.objects else ()
         title = f"({chr(97 + index) if index < 26 else index}) {name}"
         if result.stage and result.stage[index]:
             title += f"\n[{result.stage[index]}, not a TCA]"
-        ax = draw_robot(solution, title=title, objects=objects, **view)
-        _fix_limits(ax, _limits(result))
+        ax = draw_robot(solution, title=title, objects=objects, limits=limits, **view)
         path = directory / f"step_{index:02d}_{_slug(name)}.png"
         paths.append(finish(plt, ax.figure, path, dpi=110, bbox_inches="tight", pad_inches=0.15))
     return paths
@@ -47,8 +46,7 @@ def save_animation(result, directory, fps=8, progress=None, **view):
     def draw(index):
         ax.clear()
         title, solution, objects = frames[index]
-        draw_robot(solution, ax=ax, title=title, objects=objects.values(), **view)
-        _fix_limits(ax, limits)
+        draw_robot(solution, ax=ax, title=title, objects=objects.values(), limits=limits, **view)
         if progress is not None:
             progress((index + 1) / len(frames), title)
         return []
@@ -58,11 +56,23 @@ def save_animation(result, directory, fps=8, progress=None, **view):
     return paths
 
 
+#: how far a 3D drawing is enlarged in an animation's frame (1: matplotlib's default margins)
+FRAME_ZOOM = 0.94
+
+
 def _save_movies(fig, draw, count, stem, fps):
     """Animate ``draw(frame)`` over ``count`` frames of ``fig`` into ``STEM.gif`` (and
     ``STEM.mp4`` when ffmpeg is on the PATH), each written atomically; returns the paths."""
     from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
-    animation = FuncAnimation(fig, draw, frames=count, blit=False)
+    fig.subplots_adjust(left=0.0, right=1.0, bottom=0.05, top=0.9)    # the drawing fills the frame
+
+    def framed(frame):
+        out = draw(frame)
+        for ax in fig.axes:
+            ax.set_box_aspect(ax.get_box_aspect(), zoom=FRAME_ZOOM)
+        return out
+
+    animation = FuncAnimation(fig, framed, frames=count, blit=False)
     writers = [(stem.with_suffix(".gif"), PillowWriter)]
     if shutil.which("ffmpeg"):
         writers.append((stem.with_suffix(".mp4"), FFMpegWriter))
@@ -150,8 +160,7 @@ def animate_in_time(t, solutions, keys, temperatures, heated, stem, fps=10, max_
         text = "\n".join("  ".join(warm[i:i + 3]) for i in range(0, len(warm), 3))
         draw_robot(solutions[k], ax=ax, objects=objects[k].values() if objects else (), extra_points=marks,
                    title=f"t = {t[k]:6.1f} s   ({pace})" + (f"\n{text}" if text else ""), view=view,
-                   projection=projection, norm=norm)
-        _fix_limits(ax, limits)
+                   projection=projection, norm=norm, limits=limits)
         if progress is not None:
             progress((frame + 1) / len(frames), f"frame {frame + 1}/{len(frames)}")
         return []
@@ -167,10 +176,6 @@ def _limits(result):
     points += [pose.corners() for step in result.objects for pose in step.values()]
     every = np.hstack(points) * 1e3
     return every.min(axis=1), every.max(axis=1)
-
-
-def _fix_limits(ax, limits):
-    set_equal_limits(ax, *limits)
 
 
 def _slug(name):

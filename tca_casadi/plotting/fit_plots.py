@@ -36,7 +36,7 @@ def plot_fit(result, path):
                 ".", color="tab:blue", label="after")
         ax.axhline(0, color="black", linewidth=0.8)
         ax.set_xlabel("experiment")
-        ax.set_ylabel(f"predicted - measured {name} [{'u' + unit[1:] if unit != 'mN' else 'uN'}]")
+        ax.set_ylabel(f"predicted - measured {name} [{'µN' if unit == 'mN' else 'µm'}]")
         ax.legend(fontsize=7)
     below[-1].axis("off")
     for ax, name in zip(axes, names):
@@ -61,10 +61,17 @@ def plot_fit(result, path):
     return finish(plt, fig, path)
 
 
+def histogram_bins(count):
+    """Sturges' number of bins for ``count`` samples (1 + ceil(log2 n): 6 for 20, 8 for 100), 3 to 30:
+    each bin holds enough samples to compare with a density."""
+    return int(np.clip(np.ceil(np.log2(max(count, 1))) + 1, 3, 30))
+
+
 def _residual_histogram(ax, result):
     """The fitted residuals in units of their sigma, against the standard normal density."""
     weighted = (result.residuals / result.fit.data.sigmas[result.train]).ravel()
-    ax.hist(weighted, bins=max(8, min(40, weighted.size // 5)), density=True, color="tab:blue", alpha=0.7)
+    ax.hist(weighted, bins=histogram_bins(weighted.size), density=True, color="tab:blue", alpha=0.7,
+            label=f"{weighted.size} residuals")
     grid = np.linspace(min(-4, weighted.min()), max(4, weighted.max()), 200)
     ax.plot(grid, np.exp(-grid ** 2 / 2) / np.sqrt(2 * np.pi), "k-", linewidth=1, label="N(0, 1)")
     ax.set_xlabel("residual / sigma")
@@ -110,7 +117,8 @@ def plot_fit_parameters(result, path):
             ax.annotate("not identifiable", (q.value / scale, k), textcoords="offset points", xytext=(8, 6),
                         fontsize=8, color="tab:red")
     ax.axvline(1.0, color="gray", linestyle="--", linewidth=1, label="nominal")
-    ax.set_yticks(range(count), [f"{q.path} [{q.unit}]" for q in result.parameters], fontsize=8)
+    ax.set_yticks(range(count), [f"{q.path}\n(nominal {q.shown(q.nominal):.4g} {q.shown_unit})"
+                                 for q in result.parameters], fontsize=8)
     ax.set_xlabel("fitted value / nominal value (95 % interval)")
     ax.legend(fontsize=8)
     return finish(plt, fig, path)

@@ -91,7 +91,7 @@ def temperature_norm(solution):
 
 
 def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_points=(), objects=(), view=None,
-               projection=None, norm=None):
+               projection=None, norm=None, limits=None):
     """Draw ``solution`` on a 3D axes (created when ``ax`` is None, with a colour bar of the TCAs'
     temperatures and the legend beside the drawing). Lengths in mm.
 
@@ -102,7 +102,9 @@ def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_point
     masses as black dots and point forces as arrows; ``extra_points``: iterable of ``(position
     (3,) [m], label, color)`` to mark (e.g. a target), drawn on top; ``objects``:
     :class:`~tca_casadi.studies.objects.ObjectPose` boxes; ``view``, ``projection``:
-    :func:`apply_view`.
+    :func:`apply_view`; ``limits``: ``(low, high)`` (3,) [mm] of the box (an animation's, the
+    same in every frame; default the drawing's own extent). Unbounded obstacles (planes,
+    cylinders) are cut to the box.
     """
     import matplotlib
     plt = _pyplot()
@@ -118,10 +120,11 @@ def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_point
     if joints is not None:
         ax.scatter(*joints, s=36, facecolors="white", edgecolors="black", linewidths=1.2, depthshade=False, zorder=8,
                    label="joints between modules")
+    largest = max([abs(a.tension) for a in solution.actuators.values() if np.isfinite(a.tension)], default=0.0)
+    scale, unit = (1.0, "N") if largest >= 1 else (1e3, "mN")          # one unit for every actuator
     for key, actuator in solution.actuators.items():
         kind = "tendon" if actuator.kind == "tendon" else ("heated" if actuator.heated else "passive")
-        force = "slack" if actuator.slack else (f"{actuator.tension:.3g} N" if abs(actuator.tension) >= 1
-                                                 else f"{actuator.tension * 1e3:.2f} mN")
+        force = "slack" if actuator.slack else f"{actuator.tension * scale:.3g} {unit}"
         word = {"heated": "pressurised" if actuator.pressure is not None else (
             "active" if actuator.input is not None else "heated")}.get(kind, kind)
         by_temperature = actuator.kind == "tca" and actuator.temperature is not None
@@ -133,7 +136,8 @@ def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_point
     everything += _draw_contacts(ax, solution.contacts, np.hstack(everything))
     extent = np.hstack(everything)
     for shape in solution.obstacles:
-        everything += draw_obstacle(ax, shape, extent)
+        if bounded(shape):                     # spheres and boxes count in the extent; planes do not
+            everything += draw_obstacle(ax, shape, extent)
     for pose in objects:
         corners = pose.corners() * 1e3
         color = COLORS["held" if pose.held else "object"]
@@ -147,7 +151,13 @@ def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_point
                  {"s": 70, "marker": "*", "color": color, "edgecolors": "black", "linewidths": 0.5})
         ax.scatter(*point, label=label, depthshade=False, zorder=10 + k, **style)
         everything.append(point.reshape(3, 1))
-    _equal_axes(ax, np.hstack(everything))
+    if limits is None:
+        _equal_axes(ax, np.hstack(everything))
+    else:
+        set_equal_limits(ax, *limits)
+    for shape in solution.obstacles:           # unbounded: cut to the axes' box
+        if not bounded(shape):
+            draw_obstacle(ax, shape, extent, clip=axes_box(ax))
     style_axes(ax)
     apply_view(ax, view, projection)
     state = "" if solution.converged else "  (NOT CONVERGED)"
@@ -212,17 +222,30 @@ def _draw_contacts(ax, contacts, points):
     for k, contact in enumerate(contacts):
         at = np.asarray(contact.position) * 1e3
         arrow = contact.force * 0.2 * size / largest
-        ax.quiver(*(at - arrow), *arrow, color=COLORS["contact"], linewidth=1.8, arrow_length_ratio=0.25,
+        ax.quiver(*(at - arrow), *arrow, color=COLORS["contact"], linewidth=2.6, arrow_length_ratio=0.3, zorder=9,
                   label=f"contact forces on the rods (largest {largest * 1e3:.3g} mN)" if k == 0 else None)
         drawn.append(np.column_stack([at - arrow, at]))
     return drawn
 
 
-def draw_obstacle(ax, shape, points, resolution=24):
-    """A fixed obstacle as a light wireframe, cut to the drawing's extent (planes and cylinders
-    are unbounded); returns the points drawn (mm)."""
-    low, high = points.min(axis=1), points.max(axis=1)
-    center, half = (low + high) / 2, max(float(np.max(high - low)) / 2, 1.0) * 1.1
+def bounded(shape):
+    """Whether an obstacle has a finite extent (a sphere or box; not a plane or cylinder)."""
+    return type(shape).__name__ in ("Sphere", "Box")
+
+
+def axes_box(ax):
+    """``(low, high)`` (3,) of a 3D axes' limits."""
+    limits = np.array([ax.get_xlim(), ax.get_ylim(), ax.get_zlim()])
+    return limits[:, 0], limits[:, 1]
+
+
+def draw_obstacle(ax, shape, points, resolution=24, clip=None):
+    """A fixed obstacle as a light wireframe around the drawing's extent ``points`` (3, n) [mm]
+    (planes and cylinders are unbounded); with ``clip`` ``(low, high)`` [mm], every line is cut
+    to that box (nothing drawn over the tick labels). Returns the points drawn (mm) of a sphere
+    or box (those that count in the drawing's extent)."""
+    low, high = (points.min(axis=1), points.max(axis=1)) if clip is None else clip
+    center, half = (low + high) / 2, max(float(np.max(high - low)) / 2, 1.0) * (1.1 if clip is None else 1.8)
     kind = type(shape).__name__
     style = {"color": COLORS["obstacle"], "linewidth": 0.6, "alpha": 0.7}
     u, v = np.meshgrid(np.linspace(0, 2 * np.pi, resolution), np.linspace(-1, 1, resolution // 2))
@@ -240,8 +263,16 @@ def draw_obstacle(ax, shape, points, resolution=24):
         a /= np.linalg.norm(a)
         b = np.cross(n, a)
         foot = center - ((center - shape.position * 1e3) @ n) * n
-        grid = np.linspace(-half, half, 9)
-        x, y, z = (foot[:, None, None] + a[:, None, None] * grid[None, :, None] + b[:, None, None] * grid[None, None, :])
+        corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
+                            for z in (low[2], high[2])]) - foot            # the box, in the plane's axes
+        (a_low, b_low), (a_high, b_high) = (corners @ np.column_stack([a, b])).min(0), (corners @ np.column_stack([a, b])).max(0)
+        along_a, along_b = np.linspace(a_low, a_high, 9), np.linspace(b_low, b_high, 9)
+        fine_a, fine_b = np.linspace(a_low, a_high, 121), np.linspace(b_low, b_high, 121)
+        lines = [foot[:, None] + a[:, None] * g + b[:, None] * fine_b[None, :] for g in along_a]
+        lines += [foot[:, None] + b[:, None] * g + a[:, None] * fine_a[None, :] for g in along_b]
+        for k, line in enumerate(lines):
+            ax.plot(*_clipped(line, clip), label=shape.name if k == 0 else None, **style)
+        return []
     else:                                                              # Box
         half_edges = shape.size * 1e3 / 2
         signs = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
@@ -251,8 +282,24 @@ def draw_obstacle(ax, shape, points, resolution=24):
                 if np.sum(signs[i] != signs[j]) == 1:
                     ax.plot(*corners[:, [i, j]], **style, label=shape.name if (i, j) == (0, 1) else None)
         return [corners]
-    ax.plot_wireframe(x, y, z, rstride=1, cstride=1, label=shape.name, **style)
+    if clip is None:
+        ax.plot_wireframe(x, y, z, rstride=1, cstride=1, label=shape.name, **style)
+    else:
+        rows = [np.vstack([x[i], y[i], z[i]]) for i in range(x.shape[0])]
+        columns = [np.vstack([x[:, j], y[:, j], z[:, j]]) for j in range(x.shape[1])]
+        for k, line in enumerate(rows + columns):
+            ax.plot(*_clipped(line, clip), label=shape.name if k == 0 else None, **style)
     return [np.vstack([x.ravel(), y.ravel(), z.ravel()])] if kind == "Sphere" else []
+
+
+def _clipped(line, clip):
+    """``line`` (3, n) with the points outside the box ``clip`` = (low, high) set to NaN (so the
+    drawn line stops at the box)."""
+    if clip is None:
+        return line
+    low, high = clip
+    inside = np.all((line >= np.asarray(low)[:, None] - 1e-9) & (line <= np.asarray(high)[:, None] + 1e-9), axis=0)
+    return np.where(inside[None, :], line, np.nan)
 
 
 def style_axes(ax, ticks=4):

@@ -28,88 +28,145 @@ def save_study_plots(result, directory, color=None):
     return written
 
 
+#: a tip coordinate whose samples spread less than this [mm] is constant (1 nm: roundoff of a
+#: symmetric robot), drawn as a value, not as a histogram of roundoff
+CONSTANT_MM = 1e-6
+
+
+def shown_input(result, label):
+    """``(values, axis label)`` of an input column in the unit it was given in (SI columns in the
+    files); the column as stored where the study is not at hand."""
+    values = result.converged[label].to_numpy(float)
+    study = result.study
+    if study is None or label not in result.inputs:
+        return values, label
+    path = study.design.paths[result.inputs.index(label)]
+    factor, unit = study.shown(path)
+    return values * factor, f"{path} [{unit}]"
+
+
 def _colour_column(result, color):
     data = result.converged
     column = color or result.inputs[0]
     if column not in data.columns:
         from ..errors import ScenarioError
         raise ScenarioError(f"study --color: no column {column!r}; columns: {', '.join(data.columns[:40])}")
-    return column, data[column].to_numpy(float)
+    values, label = shown_input(result, column)
+    return label, values
+
+
+def _on_a_curve(result):
+    """One varied input: the tips lie on a curve (no area to hull, no density to map)."""
+    return len(result.inputs) == 1
 
 
 def plot_workspace(result, path, color=None):
-    """The workspace figure (module docstring)."""
+    """The workspace figure (module docstring); one varied input: the curve of tips in 3D and
+    the three planes, without hulls or densities (a curve has neither)."""
     from scipy.spatial import ConvexHull, QhullError
     plt = _pyplot()
     tips = result.tips() * 1e3
     column, values = _colour_column(result, color)
-    fig = plt.figure(figsize=(14, 8.5))
-    ax3 = fig.add_subplot(2, 3, 1, projection="3d")
+    curve = _on_a_curve(result)
+    fig = plt.figure(figsize=(16, 4.8) if curve else (14, 8.5), layout="constrained")
+    rows, columns = (1, 4) if curve else (2, 3)
+    grid = fig.add_gridspec(rows, columns, width_ratios=[1.3, 1, 1, 1] if curve else None)
+    ax3 = fig.add_subplot(grid[0, 0], projection="3d")
     ax3.scatter(*tips.T, c=values, s=6, cmap="viridis", depthshade=False)
     set_equal_limits(ax3, tips.min(axis=0), tips.max(axis=0))
     style_axes(ax3)
-    ax3.set_box_aspect(None, zoom=0.85)           # room for the axis labels
-    ax3.set_title(f"{len(tips)} tips", fontsize=9)
+    ax3.set_box_aspect(None, zoom=0.8)            # room for the axis labels
+    ax3.set_title(f"{len(tips)} tips" + (" (one input: a curve)" if curve else ""), fontsize=9)
     for k, (a, b, i, j) in enumerate(PLANES):
-        ax = fig.add_subplot(2, 3, 2 + k) if k < 2 else fig.add_subplot(2, 3, 4)
+        ax = fig.add_subplot(grid[0, 1 + k] if (curve or k < 2) else grid[1, 0])
         flat = ax.scatter(tips[:, i], tips[:, j], c=values, s=5, cmap="viridis")
-        if k == 0:
+        if k == (2 if curve else 0):
             fig.colorbar(flat, ax=ax, label=column)
-        try:
-            hull = ConvexHull(tips[:, [i, j]])
-            ring = np.append(hull.vertices, hull.vertices[0])
-            ax.plot(tips[ring, i], tips[ring, j], color="black", linewidth=1.0, label="convex hull")
-            ax.legend(fontsize=7, loc="best")
-        except QhullError:                 # the projection is a line: no hull to draw
-            pass
-        ax.set_xlabel(f"tip {a} [mm]")
-        ax.set_ylabel(f"tip {b} [mm]")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_title(f"{a}{b} projection", fontsize=9)
-    for k, (a, b, i, j) in enumerate(PLANES):
-        ax = fig.add_subplot(2, 3, 5 + k) if k < 2 else None
-        if ax is None:
-            break
+        if not curve:
+            try:
+                hull = ConvexHull(tips[:, [i, j]])
+                ring = np.append(hull.vertices, hull.vertices[0])
+                ax.plot(tips[ring, i], tips[ring, j], color="black", linewidth=1.0, label="convex hull")
+                ax.legend(fontsize=7, loc="best")
+            except QhullError:                 # the projection is a line: no hull to draw
+                pass
+        _plane_axes(ax, a, b)
+    for k, (a, b, i, j) in enumerate(PLANES[:0 if curve else 2]):
+        ax = fig.add_subplot(grid[1, 1 + k])
         counts = ax.hexbin(tips[:, i], tips[:, j], gridsize=30, cmap="Greys", mincnt=1, vmin=0)
         fig.colorbar(counts, ax=ax, label="samples per bin")
-        ax.set_xlabel(f"tip {a} [mm]")
-        ax.set_ylabel(f"tip {b} [mm]")
-        ax.set_aspect("equal", adjustable="datalim")
+        _plane_axes(ax, a, b)
         ax.set_title(f"reachability density, {a}{b}", fontsize=9)
     fig.suptitle(f"{result.info['scenario']}: workspace ({result.info['design']}, "
                  f"{result.info['converged']} of {result.info['samples']} samples converged)")
     return finish(plt, fig, path)
 
 
+def _plane_axes(ax, a, b):
+    ax.set_xlabel(f"tip {a} [mm]")
+    ax.set_ylabel(f"tip {b} [mm]")
+    ax.ticklabel_format(useOffset=False)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_title(ax.get_title() or f"{a}{b} projection", fontsize=9)
+
+
+def _spread_unit(spread_mm):
+    """``(factor from mm, unit)`` for deviations of this size: µm below 1 mm, else mm."""
+    return (1e3, "µm") if np.max(np.abs(spread_mm), initial=0.0) < 1.0 else (1.0, "mm")
+
+
 def plot_monte_carlo(result, path):
-    """Histograms and covariance ellipses of the tip (module docstring)."""
+    """Histograms and covariance ellipses of the tip (module docstring). A coordinate that does
+    not vary (its spread below :data:`CONSTANT_MM`) is written as its value, not drawn as a
+    histogram of roundoff; with one varied input the tip moves on a curve, drawn coloured by the
+    input without ellipses (its covariance is degenerate)."""
+    from .fit_plots import histogram_bins
     plt = _pyplot()
     tips = result.tips() * 1e3
     mean = tips.mean(axis=0)
     spread = tips - mean
-    fig, axes = plt.subplots(2, 3, figsize=(12, 7))
+    constant = np.ptp(tips, axis=0) < CONSTANT_MM
+    factor, unit = _spread_unit(spread[:, ~constant]) if np.any(~constant) else (1e3, "µm")
+    curve = _on_a_curve(result)
+    colour_label, colour = _colour_column(result, None)
+    fig, axes = plt.subplots(2, 3, figsize=(12.5, 7.5), layout="constrained")
     for k, axis in enumerate("xyz"):
         ax = axes[0, k]
-        ax.hist(spread[:, k] * 1e3, bins=min(40, max(8, len(tips) // 10)), color="tab:blue", alpha=0.8)
-        std = spread[:, k].std(ddof=1) * 1e3 if len(tips) > 1 else 0.0
-        ax.set_xlabel(f"tip {axis} about its mean ({mean[k]:.3f} mm) [um]")
+        if constant[k]:
+            ax.text(0.5, 0.5, f"tip {axis} = {round(mean[k], 4) + 0.0:.4f} mm in every sample\n(spread below 1 nm)",
+                    ha="center", va="center", transform=ax.transAxes, fontsize=9)
+            ax.set_xticks([])
+            ax.set_yticks([])
+            ax.set_title(f"tip {axis}: constant", fontsize=9)
+            continue
+        ax.hist(spread[:, k] * factor, bins=histogram_bins(len(tips)), color="tab:blue", alpha=0.8)
+        std = spread[:, k].std(ddof=1) * factor if len(tips) > 1 else 0.0
+        ax.ticklabel_format(useOffset=False)
+        ax.set_xlabel(f"tip {axis} about its mean ({round(mean[k], 3) + 0.0:.3f} mm) [{unit}]")
         ax.set_ylabel("samples")
-        ax.set_title(f"tip {axis}: std {std:.2f} um", fontsize=9)
+        ax.set_title(f"tip {axis}: std {std:.3g} {unit}", fontsize=9)
     for k, (a, b, i, j) in enumerate(PLANES):
         ax = axes[1, k]
-        ax.scatter(spread[:, i] * 1e3, spread[:, j] * 1e3, s=5, alpha=0.6)
-        if len(tips) > 2:
-            covariance = np.cov(spread[:, [i, j]].T) * 1e6
+        points = ax.scatter(spread[:, i] * factor, spread[:, j] * factor, s=5, alpha=0.8,
+                            **({"c": colour, "cmap": "viridis"} if curve else {}))
+        if curve and k == 2:
+            fig.colorbar(points, ax=ax, label=colour_label)
+        covariance = np.cov(spread[:, [i, j]].T) * factor ** 2 if len(tips) > 2 else None
+        if not curve and covariance is not None and not constant[i] and not constant[j] and \
+                np.linalg.eigvalsh(covariance)[0] > 1e-8 * np.linalg.eigvalsh(covariance)[1]:
             for sigma, style in ((1, "-"), (2, "--")):
                 ring = _ellipse(covariance, sigma)
                 ax.plot(ring[0], ring[1], "k" + style, linewidth=1.0, label=f"{sigma} sigma")
             ax.legend(fontsize=7)
-        ax.set_xlabel(f"tip {a} - mean [um]")
-        ax.set_ylabel(f"tip {b} - mean [um]")
+        ax.ticklabel_format(useOffset=False)
+        ax.set_xlabel(f"tip {a} - mean [{unit}]")
+        ax.set_ylabel(f"tip {b} - mean [{unit}]")
         ax.set_aspect("equal", adjustable="datalim")
     import textwrap
     varied = ", ".join(a.path for a in result.study.axes if a.distribution)
     title = f"{result.info['scenario']}: Monte Carlo of {varied} ({len(tips)} samples)"
+    if curve:
+        title += "; one varied input: the tip moves on a curve (no covariance ellipses)"
     fig.suptitle("\n".join(textwrap.wrap(title, 110)), fontsize=10)
     return finish(plt, fig, path)
 
@@ -127,22 +184,23 @@ def plot_response(result, path):
     plt = _pyplot()
     data = result.converged
     if len(result.inputs) == 1:
-        label = result.inputs[0]
-        order = np.argsort(data[label].to_numpy(float))
-        x = data[label].to_numpy(float)[order]
-        fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 7), sharex=True)
+        x, label = shown_input(result, result.inputs[0])
+        order = np.argsort(x)
+        x = x[order]
+        fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 7), sharex=True, layout="constrained")
         for axis in "xyz":
-            top.plot(x, data[f"tip_{axis} [m]"].to_numpy(float)[order] * 1e3, marker=".", label=f"tip {axis}")
-        top.set_ylabel("tip [mm]")
-        top.legend(fontsize=8)
+            tip = data[f"tip_{axis} [m]"].to_numpy(float)[order] * 1e3
+            top.plot(x, tip - tip[0], marker=".", label=f"tip {axis}")
+        top.set_ylabel("tip moved from the first sample [mm]")
+        top.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
         bottom.plot(x, data["bending_angle [deg]"].to_numpy(float)[order], marker=".", color="black")
         bottom.set_ylabel("bending angle [deg]")
         bottom.set_xlabel(label)
+        bottom.ticklabel_format(axis="x", useOffset=False)
     else:
-        first, second = result.inputs
-        x, y = data[first].to_numpy(float), data[second].to_numpy(float)
+        (x, first), (y, second) = (shown_input(result, label) for label in result.inputs)
         z = data["bending_angle [deg]"].to_numpy(float)
-        fig, ax = plt.subplots(figsize=(7, 6))
+        fig, ax = plt.subplots(figsize=(7, 6), layout="constrained")
         if len(np.unique(x)) >= 2 and len(np.unique(y)) >= 2 and len(x) >= 4:
             surface = ax.tricontourf(x, y, z, levels=14, cmap="viridis")
             fig.colorbar(surface, ax=ax, label="bending angle [deg]")

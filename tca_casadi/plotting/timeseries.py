@@ -4,7 +4,7 @@ time; named events marked. One colour and line style per actuator in every panel
 import numpy as np
 
 from .robot3d import _pyplot, finish
-from .sweep_plots import line_style
+from .sweep_plots import line_style, mark_events
 
 #: an event's label is clipped to this many characters
 EVENT_LABEL = 40
@@ -42,13 +42,19 @@ def save_timeseries_png(series, path, events=()):
     styles = actuator_styles(series)
     heated = [k for k, key in enumerate(series.keys) if not np.all(np.isnan(series.powers[:n, k]))]
     dynamic = getattr(series, "energies", None) is not None and len(series.energies)
-    panels = ["temperature"] + (["power"] if heated else []) + ["tension", "tip"] + (["energy"] if dynamic else [])
+    electrical = getattr(series, "electrical", None) or {}
+    kinds = [kind for kind in ("voltage", "current") if any(k == kind for k, _ in electrical.values())]
+    panels = (["temperature"] + (["power"] if heated else []) + kinds + ["tension", "tip"]
+              + (["energy"] if dynamic else []))
     fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.2 * len(panels) + 0.6), sharex=True)
     ax = dict(zip(panels, axes))
     for k, key in enumerate(series.keys):
         ax["temperature"].plot(t, series.temperatures[:n, k], label=key, **styles[key])
         if k in heated:
             ax["power"].plot(t, series.powers[:n, k] * 1e3, label=key, drawstyle="steps-post", **styles[key])
+    for key, (kind, values) in electrical.items():
+        ax[kind].plot(t, values[:n] * (1e3 if kind == "current" else 1.0), label=key, drawstyle="steps-post",
+                      **styles[key])
     for key in (series.solutions[0].actuators if n else []):
         ax["tension"].plot(t, [s.actuators[key].tension * 1e3 for s in series.solutions], label=key, **styles[key])
     if n:
@@ -58,21 +64,15 @@ def save_timeseries_png(series, path, events=()):
         ax["tip"].plot(t, np.linalg.norm(move, axis=1), color="black", label="|tip displacement|", **line_style(3, n))
     if dynamic:
         _energies(ax["energy"], t, series.energies[:n], n)
-    labels = {"temperature": "temperature [degC]", "power": "electrical power [mW]", "tension": "tension [mN]",
+    labels = {"temperature": "temperature [degC]", "power": "electrical power [mW]", "voltage": "voltage [V]",
+              "current": "current [mA]", "tension": "tension [mN]",
               "tip": "tip displacement [mm]", "energy": "energy [mJ]"}
-    named = [(e, None) if np.isscalar(e) else e for e in events]
     for name, axis in ax.items():
         axis.set_ylabel(labels[name])
         axis.grid(True, alpha=0.3)
         if axis.get_legend_handles_labels()[0]:
             axis.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-        for at, _ in named:
-            axis.axvline(at, color="tab:red", linestyle=":", linewidth=1)
-    for at, label in named:
-        if label:
-            axes[0].annotate(label, (at, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -2),
-                             textcoords="offset points", rotation=90, va="top", ha="left", fontsize=6,
-                             color="tab:red")
+    mark_events(axes, [(e, None) if np.isscalar(e) else e for e in events])
     axes[-1].set_xlabel("time [s]")
     state = "" if series.completed else f"  (stopped: {series.message[:60]})"
     axes[0].set_title(f"simulate{state}", fontsize=10)

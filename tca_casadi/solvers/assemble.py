@@ -9,6 +9,7 @@ from ..model.balance import global_balance, load_markers
 from ..model.compatibility import slack_length
 from ..model.contact import CLOSED, contact_geometry, gaps, outline_of, outline_size
 from ..model.rotations import rotations_of
+from ..text import unit_text
 from ..solution import ActuatorResult, ContactResult, ModuleResult, Solution
 
 #: a tension_only actuator with less tension than this fraction of its module's force scale is
@@ -132,7 +133,7 @@ def contact_results(robot, modules, module_data, forces, clearance=None, frictio
         if nearest["gap"] < -robot.contact_tolerance:
             what = "obstacle" if shape is not None else "object"
             warnings.append(PhysicsWarning(
-                "penetration", f"module {nearest['module']} cuts {-nearest['gap'] * 1e6:.3g} um into {what} "
+                "penetration", f"module {nearest['module']} cuts {-nearest['gap'] * 1e6:.3g} {unit_text('um')} into {what} "
                 f"{name!r} at s = {nearest['s'] * 1e3:.4g} mm, between contact candidates: add a point "
                 "there to contact.at or raise contact.points"))
     return closed, loads, found, warnings, tuple(pattern)
@@ -268,7 +269,7 @@ def _slipping_message(kind, name, module, s, contact):
     """What a slipping contact's warning says: it slides (Coulomb), or the friction it would need."""
     where = f"{kind} {name!r} slips at module {module.name} (s = {s * 1e3:.4g} mm): "
     if contact.sliding:
-        return where + (f"it slides {contact.slip * 1e6:.3g} um over it on its friction limit "
+        return where + (f"it slides {contact.slip * 1e6:.3g} {unit_text('um')} over it on its friction limit "
                         f"({contact.friction:.3g})")
     what = "grasp" if kind == "object" else "contact"
     return where + f"the {what} needs friction {contact.needed_friction:.3g} there and has {contact.friction:.3g}"

@@ -35,7 +35,7 @@ from ..discretisation.measurements import measurable_names, measurement_function
 from ..errors import ScenarioError, TcaError
 from ..scenario.checks import closest
 from .design import nearest_neighbour_order
-from .parameters import resolve_parameter
+from .parameters import resolve_parameter, shown_as_given
 
 #: default standard deviations of the measurements, per kind [m, N]
 DEFAULT_SIGMAS = {"length": 1e-4, "force": 1e-3}
@@ -193,6 +193,9 @@ class Fit:
             nominal = np.array([p.value(sim.params) for p in self.parameters])
         self.nominal, self.scale = nominal, np.where(nominal != 0, np.abs(nominal), 1.0)
         self.bounds = self._bounds(bounds or {})
+        if not self.time_series:              # shown in the unit the bounds were given in, else a readable one
+            self.parameters = [shown_as_given(p, sim.scenario, *(bounds or {}).get(p.path, ()), values=[v])
+                               for p, v in zip(self.parameters, nominal)]
         self.absolute_sigma, self.starts, self.seed = absolute_sigma, int(starts), int(seed)
         if self.starts < 1:
             raise ScenarioError(f"fit --starts {starts}: give at least 1")
@@ -491,7 +494,7 @@ def write_measurements(path, data, comments=()):
     """``data`` as a measurement CSV (inputs in their units, measurements and their sigmas in
     mm or mN), ``comments`` as ``#`` lines first."""
     from ..output import write_csv
-    header = [p.label for p in data.inputs]
+    header = [p.si_label for p in data.inputs]
     scale = [(1e3, "mN") if name.endswith(".tension") else (1e3, "mm") for name in data.names]
     header += [f"{name} [{unit}]" for name, (_, unit) in zip(data.names, scale)]
     header += [f"sigma_{name} [{unit}]" for name, (_, unit) in zip(data.names, scale)]

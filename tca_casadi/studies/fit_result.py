@@ -21,10 +21,19 @@ class FittedParameter:
     standard_error: float = None      # None: not identifiable from the data
     low: float = None                 # 95 % interval
     high: float = None
+    shown_as: object = None           # the StudyParameter that says the unit values are shown in (None: SI)
 
     @property
     def identifiable(self):
         return self.standard_error is not None
+
+    @property
+    def shown_unit(self):
+        return self.shown_as.shown_unit if self.shown_as is not None else self.unit
+
+    def shown(self, value):
+        """``value`` (SI) in :attr:`shown_unit`."""
+        return self.shown_as.shown(value) if self.shown_as is not None else value
 
     def as_dict(self):
         return {"path": self.path, "unit": self.unit, "nominal": self.nominal, "value": self.value,
@@ -83,11 +92,13 @@ class FitResult(ResultAPI):
         for j, parameter in enumerate(fit.parameters):
             nominal = float(fit.nominal[j])
             if j in unidentifiable:
-                parameters.append(FittedParameter(parameter.path, parameter.unit, nominal, float(theta[j])))
+                parameters.append(FittedParameter(parameter.path, parameter.unit, nominal, float(theta[j]),
+                                                  shown_as=_shown(parameter)))
                 continue
             error = float(np.sqrt(max(covariance[j, j], 0.0)))
             parameters.append(FittedParameter(parameter.path, parameter.unit, nominal, float(theta[j]), error,
-                                              float(theta[j] - quantile * error), float(theta[j] + quantile * error)))
+                                              float(theta[j] - quantile * error), float(theta[j] + quantile * error),
+                                              _shown(parameter)))
         errors = np.array([q.standard_error if q.identifiable and q.standard_error > 0 else np.nan for q in parameters])
         with np.errstate(invalid="ignore", divide="ignore"):
             correlation = covariance / np.outer(errors, errors)
@@ -143,9 +154,10 @@ class FitResult(ResultAPI):
                  f"{'converged' if self.converged else 'NOT CONVERGED'} "
                  f"in {self.evaluations} evaluations, {self.wall_time_s:.2f} s"]
         for q in self.parameters:
-            interval = (f"+- {q.standard_error:.3g} (95 %: {q.low:.6g} to {q.high:.6g})" if q.identifiable
-                        else "not identifiable")
-            lines.append(f"  {q.path} = {q.value:.6g} {q.unit} {interval}; nominal {q.nominal:.6g}")
+            interval = (f"+- {q.shown(q.standard_error):.3g} (95 %: {q.shown(q.low):.6g} to {q.shown(q.high):.6g})"
+                        if q.identifiable else "not identifiable")
+            lines.append(f"  {q.path} = {q.shown(q.value):.6g} {q.shown_unit} {interval}; "
+                         f"nominal {q.shown(q.nominal):.6g}")
         for when in ("before", "after", "held_out"):
             r = self.rms.get(when, {})
             parts = []
@@ -273,3 +285,8 @@ def robot_length(robot):
 
 def _nan_to_none(matrix):
     return [[None if not np.isfinite(v) else float(v) for v in row] for row in np.asarray(matrix)]
+
+
+def _shown(parameter):
+    """The fitted parameter's :class:`StudyParameter` where it has one (it knows its shown unit)."""
+    return parameter if hasattr(parameter, "shown_unit") else None

@@ -30,6 +30,9 @@ class TimeSeries(ResultAPI):
     warnings: list = field(default_factory=list)     # PhysicsWarning s (e.g. a grasp not across the object)
     tip_velocities: np.ndarray = None                # a dynamic run's: (n, 3) [m/s]
     energies: np.ndarray = None                      # a dynamic run's: (n, 7) [J], motion.ENERGY_COLUMNS
+    #: TCAs on voltage or current drives: {key: ("voltage" | "current", (n,) [V] or [A])} from
+    #: the power and the fibre's resistance at its temperature (V = sqrt(P R(T)), I = sqrt(P / R(T)))
+    electrical: dict = field(default_factory=dict)
 
     @property
     def completed(self):
@@ -64,6 +67,7 @@ class TimeSeries(ResultAPI):
         columns = ["t [s]"]
         for key in self.keys:
             columns += [f"{key}.temperature [degC]", f"{key}.power [W]", f"{key}.tension [N]", f"{key}.stroke [m]"]
+        columns += [f"{key}.{kind} [{'V' if kind == 'voltage' else 'A'}]" for key, (kind, _) in self.electrical.items()]
         columns += ["tip_x [m]", "tip_y [m]", "tip_z [m]", "tip_qw", "tip_qx", "tip_qy", "tip_qz"]
         if getattr(self, "energies", None) is not None:          # a dynamic run
             from .motion import ENERGY_COLUMNS
@@ -75,7 +79,7 @@ class TimeSeries(ResultAPI):
 
     def rows(self):
         """``timeseries.csv`` rows: t, per TCA temperature, power (empty where not heated),
-        tension, stroke; the tip position and quaternion; each object's held flag and centre;
+        tension, stroke; the voltage or current of TCAs on such drives; the tip position and quaternion; each object's held flag and centre;
         each obstacle's normal force and clearance; converged."""
         out = []
         for k, solution in enumerate(self.solutions):
@@ -84,6 +88,7 @@ class TimeSeries(ResultAPI):
                 actuator = solution.actuators[key]
                 power = "" if np.isnan(self.powers[k, j]) else f"{self.powers[k, j]:.10g}"
                 row += [f"{self.temperatures[k, j]:.10g}", power, f"{actuator.tension:.10g}", f"{actuator.stroke:.10g}"]
+            row += [f"{values[k]:.10g}" for _, values in self.electrical.values()]
             row += [f"{v:.10g}" for v in solution.tip_position]
             row += [f"{v:.10g}" for v in matrix_to_quaternion(solution.tip_rotation)]
             if getattr(self, "energies", None) is not None:

@@ -36,7 +36,7 @@ from ..solvers.continuation import BranchFollower
 from ..solvers.newton import BufferedFunction, CscPattern
 from ..status import SolveStatus, Status
 from .inverse_result import InverseResult, write_path_results  # noqa: F401  (re-exported)
-from .parameters import resolve_parameters
+from .parameters import resolve_parameters, shown_as_given
 from .targets import Target, TargetLayout, read_targets  # noqa: F401  (re-exported)
 
 log = logging.getLogger(__name__)
@@ -70,6 +70,8 @@ class InverseStatics:
                                     f"pressures...); {parameter.path} is not one")
         self._muscle = inputs
         self.bounds = self._bounds(bounds)
+        self.parameters = [shown_as_given(p, sim.scenario, *(bounds or ()), values=b)
+                           for p, b in zip(self.parameters, self.bounds)]
         self.tolerance, self.angle_tolerance = float(tolerance), float(angle_tolerance)
         self.regularisation, self.orientation_weight = float(regularisation), float(orientation_weight)
         if int(starts) < 1:
@@ -337,7 +339,7 @@ class InverseStatics:
                              best["angle_error"], reachable, status.success, best["objective"],
                              forward, difference, elapsed, iterations, tried, message,
                              best["w"], best["tau"], self.method, status,
-                             {p.path: p.unit for p in self.parameters})
+                             {p.path: p.unit for p in self.parameters}, self.parameters)
 
     def residual_values(self, w, tau, vector):
         """The least-squares residuals ``r`` (m,), ``dr/dw`` (sparse) and ``dr/dtau`` (m, k) at

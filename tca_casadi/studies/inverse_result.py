@@ -38,6 +38,8 @@ class InverseResult(ResultAPI):
     method: str = "reduced"            # 'reduced' (least squares) or 'ipopt' (full space)
     result: Optional[object] = None    # SolveStatus of the optimisation that gave the answer
     units: dict = field(default_factory=dict)   # {path: unit} of the inputs (default degC)
+    #: the inputs' StudyParameters, which say the unit each is shown in (the one its bounds were given in)
+    parameters: list = field(default_factory=list)
 
     @property
     def verified(self):
@@ -106,7 +108,11 @@ class InverseResult(ResultAPI):
                  f"  forward check: {self.verification_difference:.2e} m "
                  f"({'verified' if self.verified else 'NOT VERIFIED'})",
                  f"  {self.solve_time_s * 1e3:.0f} ms, {self.iterations} {ITERATIONS[self.method]}, {self.starts} start(s)"]
-        lines += [f"  {path:<28}{value:9.3f} {self.units.get(path, 'degC')}" for path, value in self.temperatures.items()]
+        shown = {p.path: p for p in self.parameters}
+        for path, value in self.temperatures.items():
+            parameter = shown.get(path)
+            value, unit = (parameter.shown(value), parameter.shown_unit) if parameter else (value, self.units.get(path, "degC"))
+            lines.append(f"  {path:<28}{value:9.3f} {unit}")
         return "\n".join(lines)
 
 

@@ -15,13 +15,13 @@ vector entry, or its magnitude:
 
 (every name of ``robot.layout``: :mod:`tca_casadi.model.parameters`).
 """
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..errors import ScenarioError
 from ..scenario.checks import closest
-from ..units import UNIT_OF, to_si
+from ..units import UNIT_OF, in_unit, readable_unit, to_si, unit_given, unit_text
 
 COMPONENTS = {"x": 0, "y": 1, "z": 2, "[0]": 0, "[1]": 1, "[2]": 2, "[3]": 3}
 
@@ -35,14 +35,50 @@ class StudyParameter:
     slice: slice
     direction: np.ndarray
     kind: str                 # unit kind (units.KINDS)
+    #: the unit values are shown in (summaries, plots); None: the SI unit. Files keep SI.
+    display: str = None
 
     @property
     def unit(self):
+        """The SI unit of the parameter's values (files, columns, arguments)."""
         return UNIT_OF[self.kind]
 
     @property
+    def shown_unit(self):
+        """The unit shown to people: the one the user gave, else the SI unit."""
+        return unit_text(self.display) if self.display else self.unit
+
+    @property
     def label(self):
+        """``"path [unit]"`` in the shown unit (plots, summaries)."""
+        return f"{self.path} [{self.shown_unit}]"
+
+    @property
+    def si_label(self):
+        """``"path [SI unit]"``: the header of the parameter's column in files."""
         return f"{self.path} [{self.unit}]"
+
+    def shown(self, value):
+        """``value`` (SI, scalar or array) in :attr:`shown_unit`."""
+        return in_unit(value, self.kind, self.display)
+
+    def describe(self, value, digits=6):
+        """``"path = 6 mm"``: the value in the shown unit."""
+        return f"{self.path} = {self.shown(value):.{digits}g} {self.shown_unit}"
+
+    def shown_in(self, *given, values=()):
+        """A copy shown in the unit of the first of ``given`` that has one (``"6 mm"``), else, where
+        ``values`` (SI) are passed, in a readable unit for them (``519.6 µm``, ``200 kPa``)."""
+        unit = next((u for u in map(unit_given, given) if u), None)
+        if unit is None and len(values):
+            unit = readable_unit(self.kind, values)
+        if unit is None or self.kind == "temperature":
+            return self
+        try:
+            in_unit(1.0, self.kind, unit)
+        except Exception:       # a unit of another dimension was refused where the value was read
+            return self
+        return replace(self, display=unit)
 
     def value(self, params):
         return float(self.direction @ np.asarray(params)[self.slice])
@@ -144,3 +180,35 @@ def check_range(robot, parameter, *values, params=None):
         problem = actuator.law.input_problem(parameter.path, value, actuator.type_path)
         if problem:
             raise ScenarioError(problem)
+
+
+#: raw scenario lists whose items are addressed by name in a parameter path
+_NAMED_LISTS = ("modules", "actuators", "loads", "objects", "obstacles")
+
+
+def written_value(scenario, parameter):
+    """What the scenario file wrote for ``parameter`` (``"0.5 mm"``, ``125000``), or None where the
+    path does not lead to one value (a default, a vector's magnitude). Walks the raw YAML by the
+    layout name: mapping keys, and items of the named lists by their ``name``."""
+    current = getattr(scenario, "_raw", None)
+    for key in parameter.name.split("."):
+        if isinstance(current, dict) and key in current:
+            current = current[key]
+            continue
+        lists = [current.get(name) for name in _NAMED_LISTS] if isinstance(current, dict) else []
+        items = [item for group in lists if isinstance(group, list) for item in group
+                 if isinstance(item, dict) and item.get("name") == key]
+        if not items:
+            return None
+        current = items[0]
+    if isinstance(current, list):
+        index = np.flatnonzero(parameter.direction == 1.0)
+        inside = len(current) == len(parameter.direction) and index.size == 1
+        current = current[int(index[0])] if inside else None
+    return current if isinstance(current, (str, int, float)) and not isinstance(current, bool) else None
+
+
+def shown_as_given(parameter, scenario, *given, values=()):
+    """``parameter`` shown in the first unit found in ``given`` (command-line values), else the unit
+    the scenario wrote it in, else a readable unit for ``values`` (:meth:`StudyParameter.shown_in`)."""
+    return parameter.shown_in(*given, written_value(scenario, parameter), values=values)

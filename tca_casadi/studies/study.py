@@ -31,7 +31,7 @@ import numpy as np
 from ..errors import ScenarioError
 from .design import Axis, build_design, rows_design
 from .executors import describe, executor_of, run_dask, run_processes, run_serial
-from .parameters import check_range, resolve_parameter
+from .parameters import check_range, resolve_parameter, shown_as_given
 from .study_worker import OUTPUTS, Chunk, failure_row, output_kind, solve_chunk
 
 #: samples per chunk at most
@@ -69,6 +69,7 @@ class Study:
         self.sim, self.outputs, self.seed = sim, list(outputs), int(seed)
         self.kinds = {}                  # path -> StudyParameter, or None for a structural path
         self.units = {}                  # structural path -> SI unit symbol, where given with one
+        self.given = {}                  # path -> its first value as given ("0.5mm"): the unit to show it in
         self._meshes = {}                # structure -> (meshes, degree), fixed in this process
         self.nominal = None              # the Simulation solved at the scenario's own values
         if rows is not None and vary:
@@ -121,6 +122,7 @@ class Study:
         first = (spec.get("range") or spec.get("uniform") or spec.get("values")
                  or [spec["normal"].get("mean") if isinstance(spec.get("normal"), dict) else None])
         self.kinds[path] = self._kind(path, [first[0]])
+        self.given[path] = first[0]
         si = lambda value, what="value": self._si(path, value, what)     # noqa: E731
         if "range" in spec or "uniform" in spec:
             bounds = spec.get("range") or spec.get("uniform")
@@ -138,6 +140,26 @@ class Study:
             mean, std = si(normal["mean"], "mean"), _difference(self, path, normal["std"])
             return Axis(path, "normal", mean=mean, std=std)
         return Axis(path, "values", values=[si(v) for v in spec["values"]])
+
+    def shown(self, path):
+        """``(factor, unit)``: a column of ``path`` (SI) times ``factor`` is in ``unit``, the unit its
+        values were given in (else the scenario's, else a readable one; temperatures in degC)."""
+        from ..units import in_unit, unit_given, unit_text, ureg
+        parameter = self.kinds.get(path)
+        if parameter is not None:
+            axis = next((a for a in self.axes if a.path == path), None)
+            values = [v for v in ([axis.low, axis.high, axis.mean] + list(axis.values or [])
+                                  if axis is not None else []) if v is not None]
+            parameter = shown_as_given(parameter, self.sim.scenario, self.given.get(path), values=values)
+            return (1.0 if parameter.kind == "temperature" else in_unit(1.0, parameter.kind, parameter.display),
+                    parameter.shown_unit)
+        unit = unit_given(str(self.given.get(path, "")))
+        if unit is None or path not in self.units:
+            return 1.0, self.units.get(path, "SI")
+        try:
+            return float(ureg.Quantity(1.0, self.units[path]).to(unit).magnitude), unit_text(unit)
+        except Exception:                              # (pint's many errors): shown as stored
+            return 1.0, self.units[path]
 
     def _si(self, path, value, what="value"):
         parameter = self.kinds[path]

@@ -205,7 +205,7 @@ def input_label(study, path):
     """An input column's name: ``path [unit]`` (a structural path's in SI base units: the
     unit its values were given in, converted, else ``SI``)."""
     parameter = study.kinds.get(path)
-    return parameter.label if parameter is not None else f"{path} [{study.units.get(path, 'SI')}]"
+    return parameter.si_label if parameter is not None else f"{path} [{study.units.get(path, 'SI')}]"
 
 
 def first_order_index(x, y, bins=None, corrected=True):

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..errors import ScenarioError
 from ..solvers.continuation import ArclengthFollower, BranchFollower
-from .parameters import check_range, resolve_parameters
+from .parameters import check_range, resolve_parameters, shown_as_given
 from .sweep_result import SweepResult, find_events
 
 log = logging.getLogger(__name__)
@@ -70,6 +70,8 @@ class Sweep:
         self.parameters = resolve_parameters(sim.robot, sim.params, list(paths))
         self.start = self._values(start, "start")
         self.stop = self._values(stop, "stop")
+        self.parameters = [shown_as_given(p, sim.scenario, a, b, values=[lo, hi]) for p, a, b, lo, hi in
+                           zip(self.parameters, self._given(start), self._given(stop), self.start, self.stop)]
         for parameter, a, b in zip(self.parameters, self.start, self.stop):
             check_range(sim.robot, parameter, a, b, params=sim.params)
         base = sim.params.copy()
@@ -84,10 +86,12 @@ class Sweep:
         self.tolerance = sim.scenario.solver.tolerance
         self.follower = BranchFollower(self.solver, self.P_start, self.delta, jump_tolerance)
 
-    def _values(self, given, what):
+    def _given(self, given):
         given = list(given) if isinstance(given, (list, tuple, np.ndarray)) else [given]
-        if len(given) == 1:
-            given = given * len(self.parameters)
+        return given * len(self.parameters) if len(given) == 1 else given
+
+    def _values(self, given, what):
+        given = self._given(given)
         if len(given) != len(self.parameters):
             raise ScenarioError(f"{len(given)} {what} values for {len(self.parameters)} parameters")
         return np.array([p.to_si(v, f"the {what} value") for p, v in zip(self.parameters, given)])
@@ -179,7 +183,7 @@ class Sweep:
 
 
 def _describe(parameters, values):
-    return ", ".join(f"{p.path} = {v:.6g} {p.unit}" for p, v in zip(parameters, values))
+    return ", ".join(p.describe(v) for p, v in zip(parameters, values))
 
 
 def _report(progress, point, sweep):

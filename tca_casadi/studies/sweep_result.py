@@ -50,7 +50,7 @@ class SweepResult(ResultAPI):
     def _row(self, index, point):
         solution = point.solution
         row = {"step": index, "lambda [-]": point.lam}
-        row.update({p.label: v for p, v in zip(self.parameters, point.values)})
+        row.update({p.si_label: v for p, v in zip(self.parameters, point.values)})
         row.update({"converged": bool(solution.converged), "iterations": solution.iterations,
                     "substeps": point.substeps, "solve_time [s]": solution.solve_time_s})
         for axis, value in zip("xyz", solution.tip_position):
@@ -81,7 +81,7 @@ class SweepResult(ResultAPI):
     def to_dict(self):
         return {"method": self.method, "completed": self.completed, "message": self.message,
                 "total_time_s": self.total_time_s, "points": len(self.points),
-                "parameters": [p.label for p in self.parameters], "events": self.events}
+                "parameters": [p.si_label for p in self.parameters], "events": self.events}
 
     def save(self, directory, plots=True, robots=5):
         """Write ``sweep.csv``, ``sweep.json`` (status and events) and, with ``plots``,
@@ -156,7 +156,7 @@ def find_events(robot, points, parameters):
 
     def event(kind, lam, text):
         values = points[0].values + (lam - points[0].lam) * slope
-        where = ", ".join(f"{p.path} = {v:.6g} {p.unit}" for p, v in zip(parameters, values))
+        where = ", ".join(p.describe(v) for p, v in zip(parameters, values))
         events.append({"kind": kind, "lambda": float(lam),
                        "values": {p.path: float(v) for p, v in zip(parameters, values)},
                        "message": f"{text} near {where}"})

@@ -264,6 +264,11 @@ class TimeSimulation:
         temperatures = np.array([[p[layout[a.parameter]][0] for a in tcas] for p in path]).reshape(times.size, len(tcas))
         series = TimeSeries(times, [a.key for a in tcas], temperatures, powers)
         series.history = history
+        for j, (actuator, law, drive) in enumerate(zip(self.heated, self.laws, drives)):
+            if drive.kind in ("voltage", "current"):
+                resistance = law.resistance_at(history.temperature[:, j])
+                ratio = resistance if drive.kind == "voltage" else 1.0 / resistance
+                series.electrical[actuator.key] = (drive.kind, np.sqrt(np.maximum(history.power[:, j], 0.0) * ratio))
         if self.sim.scenario.dynamics.enabled:
             from .motion import follow_dynamics
             initial = self.parameters_at(times[0], left=True)       # at rest before any event at t = 0

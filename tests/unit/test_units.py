@@ -1,5 +1,7 @@
 import math
 
+import numpy as np
+
 import pytest
 
 from tca_casadi.units import to_si
@@ -45,3 +47,27 @@ def test_a_bare_route_angle_in_degrees_is_refused_from_the_command_line(capsys, 
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1
     assert "bending.tca1.route.angle" in err and "1718.87 deg" in err and "'30 deg'" in err
+
+
+# ---------------------------------------------------------------------- showing quantities (issue 35)
+@pytest.mark.parametrize("value, kind, unit, expected", [
+    (0.00051958, "length", None, "519.58 µm"), (0.006, "length", "mm", "6 mm"), (199998.39, "pressure", None,
+     "199.998 kPa"), (140011.0, "pressure", "MPa", "0.140011 MPa"), (2.33e-5, "force", None, "0.0233 mN"),
+    (23.3, "force", None, "23.3 N"), (1.5, "length", None, "1.5 m"), (100.0, "temperature", None, "100 degC"),
+    (2.0, "moment", None, "2 N m"), (0.5, "moment", None, "500 N mm"), (0.0, "length", None, "0 m"),
+])
+def test_a_quantity_is_shown_in_the_unit_given_or_a_readable_one(value, kind, unit, expected):
+    from tca_casadi.units import show
+    assert show(value, kind, unit, plain=False) == expected
+
+
+def test_micro_is_written_plain_where_asked_and_units_are_read_back_from_text():
+    from tca_casadi.units import in_unit, readable_unit, unit_given, unit_text
+    assert unit_text("um", plain=True) == "um" and unit_text("um", plain=False) == "µm"
+    assert unit_text("μm", plain=False) == "µm" and unit_text("N*mm") == "N mm"
+    assert unit_given("6 mm") == "mm" and unit_given(" -2.5e-3 kPa ") == "kPa"
+    assert unit_given("6") is None and unit_given(6) is None and unit_given("hot") is None
+    assert readable_unit("length", [0.0, 4e-3]) == "mm" and readable_unit("length", [np.nan]) == "m"
+    assert readable_unit("pressure", [1.2e9]) == "GPa" and readable_unit("curvature", [3.0]) == "1/m"
+    np.testing.assert_allclose(in_unit(np.array([1e-3, 2e-3]), "length", "mm"), [1.0, 2.0], rtol=0, atol=1e-15)
+    assert in_unit(25.0, "temperature", "K") == 25.0          # temperatures stay degC
