@@ -314,11 +314,15 @@ def _validate(args):
     history = history_names_of(robot)
     names = [name for name in robot.layout.names() if name not in history]
     print(f"parameters ({len(names)}: --set or sweep them without rebuilding the model):")
-    from .units import UNIT_OF
+    from .scenario.written import written_value
+    from .units import UNIT_OF, unit_given
     for name in names:
         value = np.atleast_1d(robot.values[robot.layout[name]])
         text = f"{value[0]:.6g}" if value.size == 1 else "[" + ", ".join(f"{v:.6g}" for v in value) + "]"
-        print(f"  {name:<44} {text} {UNIT_OF[robot.layout.kind(name)]}")
+        written = written_value(scenario, name) if value.size == 1 else None
+        given = f"  ({written} as written)" if unit_given(written) and unit_given(written) != \
+            UNIT_OF[robot.layout.kind(name)] else ""
+        print(f"  {name:<44} {text} {UNIT_OF[robot.layout.kind(name)]}{given}")
     if history:
         kinds = sorted({".".join(name.split(".")[0:1] + ["NAME"] + name.split(".")[2:3]) for name in history})
         print(f"contact history ({len(history)} parameters {', '.join(k + '.*' for k in kinds)}: friction's anchors, "

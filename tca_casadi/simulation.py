@@ -93,8 +93,12 @@ class Simulation:
 
     # ------------------------------------------------------------------ solving
     def solver(self, method=None):
-        """The solver for ``method`` (built on first use, then reused)."""
+        """The solver for ``method`` (built on first use, then reused while the robot is the same:
+        localised contacts make a new robot, for which a solver other than the one that
+        localised them is built anew)."""
         method = method or self.method
+        if method in self._solvers and self._solvers[method].robot is not self.robot and method != "collocation":
+            del self._solvers[method]
         if method not in self._solvers:
             if method not in SOLVERS:
                 raise ScenarioError(f"unknown solver method {method!r}; available: {', '.join(SOLVERS)}")

@@ -31,10 +31,8 @@ import numpy as np
 
 from ..model import boundary
 from ..model.compatibility import compatibility_residuals
-from ..model.bodies import (CONTACT_UNKNOWNS, CORNER_SIGNS, body_equilibrium, body_pose, body_scales, body_shape,
-                             corner_points, friction_equations, grip_friction, support_equations)
-from ..model.history import support_parameter
-from ..model.contact import contact_geometry, normal_contact, outline_size
+from ..model.bodies import CONTACT_UNKNOWNS, CORNER_SIGNS, body_pose, body_scales, body_shape
+from ..model.contact_unknowns import ContactViews, contact_conditions
 from ..model.loads import distributed_fields, is_active
 from ..model.rod import STATE_SIZE, rod_equations
 from .mesh import CollocationScheme, build_mesh
@@ -209,14 +207,31 @@ class CollocationNLP:
             return self._tensions[self.robot.unknowns.index(actuator)]
         return self.P[self.robot.layout[actuator.parameter]][0]
 
+    @property
+    def contact_block_index(self):
+        """Indices in ``w`` of the contact block in the order of
+        :class:`~tca_casadi.model.contact_unknowns.ContactUnknowns` (normal forces, frictions,
+        grips, per body its pose and corners): what another solver warm-starts from."""
+        parts = [self.contact_index] + [self.friction_index[c] for c in sorted(self.friction_index)]
+        parts += list(self.grip_index)
+        for body in self.robot.bodies:
+            parts.append(self.pose_index[body.index])
+            if body.index in self.support_index:
+                parts.append(self.support_index[body.index])
+        return np.concatenate(parts).astype(int) if parts else np.zeros(0, int)
+
+    @property
+    def contact_views(self):
+        """:class:`~tca_casadi.model.contact_unknowns.ContactViews` of this NLP's contact and body
+        unknowns (symbolic, physical units)."""
+        return ContactViews(self._contact_forces, self._frictions, self._grips, self._poses, self._body_shapes,
+                            self._supports)
+
     def contact_of(self, contact):
         """``(shape, normal force [N], tangential force (3,) [N] or None)`` of a contact
         (:class:`~tca_casadi.model.contact.ContactModel`): the obstacle placed at the
         parameters, or (a grip) the body at its unknown pose, symbolic."""
-        if contact.body is not None:
-            return (self._body_shapes[contact.body],) + self._grips[contact.index][0:2]
-        tangential = self._frictions[contact.index][0] if contact.index in self._frictions else None
-        return self.robot.obstacle_of(contact.obstacle, self.param), self._contact_forces[contact.index], tangential
+        return self.contact_views.contact_of(self.robot, self.param)(contact)
 
     def param(self, name):
         return self.P[self.robot.layout[name]]
@@ -417,59 +432,11 @@ class CollocationNLP:
         self._g.extend(compatibility_residuals(self.robot, self._lengths, self.tension_of, self.param))
 
     def _contact_conditions(self):
-        """One scaled complementarity per contact (:func:`~tca_casadi.model.contact.normal_contact`)
-        on the gap at its candidate's node; against an obstacle with friction, its four friction
-        equations (:func:`~tca_casadi.model.bodies.friction_equations`, the anchor measured
-        from the obstacle's position)."""
-        robot = self.robot
-        for c in robot.contacts:
-            module = robot.modules[c.module]
-            node = self._node_at[c.module][_breakpoint(self._node_at[c.module], c.s)]
-            shape = robot.obstacle_of(c.obstacle, self.param)
-            g, n, point = contact_geometry(shape, module, node)
-            f, fs, gs = self._contact_forces[c.index], module.force_scale, outline_size(module)
-            self._g.append(normal_contact(f, g, fs, gs))
-            if c.index in self._frictions:
-                tangential, slip = self._frictions[c.index]
-                moved = point - shape.position - self.param(robot.contact_parameter(c, "anchor"))
-                self._g.append(friction_equations(moved, n, self.param(robot.contact_parameter(c, "sticks")), f,
-                                                  tangential, slip, g, fs, gs, robot.obstacles[c.obstacle].friction,
-                                                  robot.friction_law == "coulomb"))
-        self._body_conditions()
-
-    def _body_conditions(self):
-        """Per grip its normal complementarity and its four friction equations; per body its
-        six equilibrium equations and, on a support, five per corner
-        (:mod:`tca_casadi.model.bodies`)."""
-        robot = self.robot
-        on_body = [[] for _ in robot.bodies]
-        poses = [(shape.position, shape.rotation) for shape in self._body_shapes]      # (r, R) of each body
-        for c in robot.grips:
-            module, body = robot.modules[c.module], robot.bodies[c.body]
-            node = self._node_at[c.module][_breakpoint(self._node_at[c.module], c.s)]
-            g, n, point = contact_geometry(self._body_shapes[c.body], module, node)
-            fs, gs = module.force_scale, outline_size(module)
-            f, t, slip = self._grips[c.index]
-            self._g.append(normal_contact(f, g, fs, gs))
-            self._g.append(grip_friction(point, n, *poses[c.body], self.param(robot.grip_parameter(c, "anchor")),
-                                         self.param(robot.grip_parameter(c, "sticks")), f, t, slip, g, fs, gs,
-                                         body.friction, body.sliding))
-            on_body[c.body].append((point, f * n + t))
-        for body in robot.bodies:
-            fo, lo = body_scales(body)
-            r, R = poses[body.index]
-            weight = self.param(f"{body.name}.mass") * self.param("gravity")
-            support = []
-            if body.index in self._supports:
-                corners = self._supports[body.index]
-                plane = robot.obstacle_of(body.support, self.param)
-                anchors = [self.param(support_parameter(body.name, j, "anchor")) for j in range(len(corners))]
-                sticks = [self.param(support_parameter(body.name, j, "sticks")) for j in range(len(corners))]
-                self._g.append(support_equations(plane, body, r, R, anchors, sticks, corners))
-                n = plane.signed_distance(r)[1]
-                support = [(point, f * n + t) for point, (f, t, _) in zip(corner_points(body, r, R), corners)]
-            force, moment = body_equilibrium(r, weight, on_body[body.index], support)
-            self._g.append(ca.vertcat(force / fo, moment / (fo * lo)))
+        """The contact block's equations (:func:`~tca_casadi.model.contact_unknowns.contact_conditions`)
+        on the states at the candidates' nodes."""
+        def state_at(m, s):
+            return self._node_at[m][_breakpoint(self._node_at[m], s)]
+        self._g.extend(contact_conditions(self.robot, self.contact_views, state_at, self.param))
 
     # ------------------------------------------------------------------ helpers for solvers
     def banded_columns(self):

@@ -14,7 +14,10 @@ from ..units import to_si
 
 
 def _quantity(kind):
-    return BeforeValidator(lambda value: to_si(value, kind))
+    def convert(value):
+        return to_si(value, kind)
+    convert.kind = kind                 # the unit kind, read by the scenario reference (reference.py)
+    return BeforeValidator(convert)
 
 
 def _vector(kind, size):
@@ -24,6 +27,7 @@ def _vector(kind, size):
         if len(value) != size:
             raise ValueError(f"expected a list of {size} values, got {len(value)}")
         return tuple(to_si(item, kind) for item in value)
+    convert.kind = kind
     return BeforeValidator(convert)
 
 

@@ -260,7 +260,8 @@ class CollocationSolver:
                                           f"{self.options.tolerance:.0e}: roundoff in the equations' terms on this "
                                           "mesh allows no less"))
         return build_solution(self.robot, robot_params, module_data, tensions, lengths.ravel(), status,
-                              self.method, {"w": w}, notices=notices, check_balance=balance,
+                              self.method, {"w": w, "contact": w_phys[nlp.contact_block_index]}, notices=notices,
+                              check_balance=balance,
                               extra_loads=self._extra_loads(w, params, module_data) if balance else None,
                               **contact)
 

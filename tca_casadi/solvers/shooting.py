@@ -28,10 +28,11 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import root
 
 from ..discretisation.mesh import module_breakpoints
-from ..errors import PhysicsWarning, ScenarioError
+from ..errors import PhysicsWarning
 from ..status import SolveStatus, Status
 from ..model import boundary
 from ..model.compatibility import compatibility_residuals
+from ..model.contact_unknowns import ContactUnknowns, contact_conditions
 from ..model.loads import distributed_fields, is_active
 from ..model.rod import STATE_SIZE, explicit_strain_rate, rod_equations
 from ..model.routes import route_expressions
@@ -63,9 +64,6 @@ class ShootingSolver:
     estimates_error = False
 
     def __init__(self, robot, options, rtol=1e-11, atol=1e-12, jacobian="variational"):
-        if robot.obstacles:
-            raise ScenarioError("obstacles: the shooting solver does not model contact (yet); "
-                                "solve with solver.method: collocation")
         start = time.perf_counter()
         self.robot, self.options = robot, options
         self.rtol, self.atol = rtol, atol
@@ -74,13 +72,22 @@ class ShootingSolver:
         self.jacobian = jacobian
         self._free = free_starts(robot)
         self._segments = [_segments(robot, m) for m in range(len(robot.modules))]
-        n_unknowns = 6 * len(self._free) + len(robot.unknowns)
+        #: contact forces and free bodies (:mod:`tca_casadi.model.contact_unknowns`): unknowns after
+        #: the tensions, their conditions residuals after the compatibility equations
+        self._contact = ContactUnknowns(robot)
+        self._candidates = contact_candidates(robot)
+        #: each candidate's breakpoint (the segment end the shot passes through there)
+        self._break_of = {key: (key[0], _nearest(module_breakpoints(robot, key[0]), key[1])) for key in self._candidates}
+        self._recorded = set(self._break_of.values())
+        n_unknowns = 6 * len(self._free) + len(robot.unknowns) + self._contact.size
         self._rhs = [[_segment_rhs(module, [module.actuators[k] for k in active], n_unknowns)
                       for _, _, active in self._segments[m]] for m, module in enumerate(robot.modules)]
-        self._jumps = [[_jump_function(robot, m, s0) for s0, _, _ in self._segments[m][1:]]
+        self._jumps = [[_jump_function(robot, m, s0, self._contact) for s0, _, _ in self._segments[m][1:]]
                        for m in range(len(robot.modules))]
-        self._ends = [_end_function(robot, m, self._free) for m in range(len(robot.modules))]
+        self._ends = [_end_function(robot, m, self._free, self._contact) for m in range(len(robot.modules))]
         self._compatibility = _compatibility_function(robot)
+        self._conditions = _conditions_function(robot, self._contact, self._candidates)
+        self._bases = [None] * len(robot.modules)          # base wrench Functions, built on first output
         self._tension_map = _tension_map(robot)
         #: optional extra output arc lengths per module (e.g. another solver's nodes)
         self.sample_s = None
@@ -91,17 +98,27 @@ class ShootingSolver:
     def _unknown_scale(self):
         strains = [self.robot.modules[m].state_scale[7:13] for m in self._free]
         tensions = [self.robot.modules[a.module].force_scale for a in self.robot.unknowns]
-        return np.r_[np.concatenate(strains), tensions]
+        return np.r_[np.concatenate(strains), tensions, self._contact.scale]
+
+    @property
+    def _contact_start(self):
+        """Index of the first contact unknown in ``z``."""
+        return 6 * len(self._free) + len(self.robot.unknowns)
 
     def initial_guess(self, initial=None):
-        """Scaled unknowns from a previous Solution (any method), else the reference state."""
+        """Scaled unknowns from a previous Solution (any method), else the reference state. The
+        contact block comes from the Solution's own (``raw["contact"]``, both solvers write it)
+        when it has the same size, else it starts at zero forces and the placed bodies."""
         n_strain = 6 * len(self._free)
-        z = np.zeros(n_strain + len(self.robot.unknowns))
+        z = np.zeros(self._contact_start + self._contact.size)
         if initial is not None:
             for k, m in enumerate(self._free):
                 start, module = initial.modules[m], self.robot.modules[m]
                 z[6 * k:6 * k + 6] = np.r_[start.u[:, 0], start.v[:, 0]] - module.xi_star
-            z[n_strain:] = [initial.actuators[a.key].tension for a in self.robot.unknowns]
+            z[n_strain:self._contact_start] = [initial.actuators[a.key].tension for a in self.robot.unknowns]
+            block = np.asarray(initial.raw.get("contact", ()), float)
+            if block.size == self._contact.size:
+                z[self._contact_start:] = block
         return z / self._unknown_scale()
 
     # ------------------------------------------------------------------ solve
@@ -145,8 +162,7 @@ class ShootingSolver:
         status = SolveStatus.judged("scipy root (hybr)", worst, self.tolerance, nit=int(result.nfev),
                                     solve_time_s=elapsed, build_time_s=self.build_time_s,
                                     detail=f"{self.jacobian} Jacobian: {result.message.strip()}; {shots[0]} shots")
-        return build_solution(self.robot, params, *trajectory, status, self.method, {"z": result.x},
-                              self._notices(worst))
+        return self._solution(params, trajectory, status, result.x, self._notices(worst))
 
     def evaluate(self, z, params, status):
         """A :class:`Solution` of one shot from scaled unknowns ``z`` at ``params``; ``status``
@@ -161,8 +177,7 @@ class ShootingSolver:
         status = SolveStatus.judged(status.algorithm, worst, self.tolerance, status.status, nit=status.nit,
                                     solve_time_s=status.solve_time_s, build_time_s=self.build_time_s,
                                     detail=status.detail)
-        return build_solution(self.robot, params, *trajectory, status, self.method,
-                              {"z": np.asarray(z, float)}, self._notices(worst))
+        return self._solution(params, trajectory, status, np.asarray(z, float), self._notices(worst))
 
     def _failed(self, params, message, elapsed):
         """A Solution-shaped failure carrying the reference shape's arrays; converged False."""
@@ -170,7 +185,15 @@ class ShootingSolver:
         status = SolveStatus(Status.INTEGRATION_FAILED, "scipy root (hybr)", residual=float("inf"),
                              tolerance=self.tolerance, solve_time_s=elapsed, build_time_s=self.build_time_s,
                              detail=message)
-        return build_solution(self.robot, params, *trial, status, self.method, {})
+        return build_solution(self.robot, params, *trial, status, self.method, {},
+                              **self._contact.solution_values(np.zeros(self._contact.size)))
+
+    def _solution(self, params, trajectory, status, z, notices):
+        """The :class:`Solution` of a shot at scaled unknowns ``z``: its contact forces and bodies
+        from the contact block, which ``raw["contact"]`` keeps (physical) for warm starts."""
+        block = (z * self._unknown_scale())[self._contact_start:]
+        return build_solution(self.robot, params, *trajectory, status, self.method, {"z": z, "contact": block},
+                              notices, **self._contact.solution_values(block))
 
     def _notices(self, residual):
         """A ``tolerance_floor`` warning when the accepted ``residual`` met the floored
@@ -206,8 +229,13 @@ class ShootingSolver:
         robot, n = self.robot, unknowns.size
         T, F0 = self._tension_map
         F0 = F0(params)
-        forces = F0 + T @ unknowns[6 * len(self._free):]
-        dF = np.hstack([np.zeros((T.shape[0], 6 * len(self._free))), T]) if derivatives else None
+        first = self._contact_start
+        forces = F0 + T @ unknowns[6 * len(self._free):first]
+        dF = np.hstack([np.zeros((T.shape[0], 6 * len(self._free))), T, np.zeros((T.shape[0], n - first))]) \
+            if derivatives else None
+        contact = unknowns[first:]
+        dC = _selection(n, range(first, n), 0) if derivatives else None
+        found = {}                      # (module, s) of each contact candidate -> (state, d state / dz)
         starts = {0: (np.r_[params[robot.layout["base.position"]], params[robot.layout["base.quaternion"]],
                             unknowns[0:6]], _selection(n, range(0, 6), 7) if derivatives else None)}
         residuals, jacobians = [], []
@@ -217,23 +245,24 @@ class ShootingSolver:
         for m, module in enumerate(robot.modules):
             x0, D0 = starts[m]
             own = [robot.actuators.index(a) for a in module.actuators]
-            end, D_end, mod_lengths, D_lengths, data = self._integrate(m, x0, D0, forces, dF, params, outputs)
+            end, D_end, mod_lengths, D_lengths, data = self._integrate(m, x0, D0, forces, dF, contact, dC, params,
+                                                                       outputs, found)
             lengths[own] = mod_lengths
             if derivatives:
                 length_D[own] = D_lengths
             free_children = [c for c in robot.children(m) if c in self._free]
             strains = [unknowns[6 * self._free.index(c):6 * self._free.index(c) + 6] for c in free_children]
-            values = self._ends[m](end, *strains, forces, params)
+            values = self._ends[m](end, *strains, forces, contact, params)
             values = [np.array(v, float) for v in values]
             count = 1 + len(free_children)           # main output, then each free child's start
             mains, jac = values[:count], values[count:]
             if derivatives:
-                # jac: for each output, d/d end, d/d each strain, d/d forces
-                per = 2 + len(free_children)
+                # jac: for each output, d/d end, d/d each strain, d/d forces, d/d contact unknowns
+                per = 3 + len(free_children)
                 D_outs = []
                 for o in range(count):
                     block = jac[o * per:(o + 1) * per]
-                    D = block[0] @ D_end + block[-1] @ dF
+                    D = block[0] @ D_end + block[-2] @ dF + block[-1] @ dC
                     for k, c in enumerate(free_children):
                         cols = range(6 * self._free.index(c), 6 * self._free.index(c) + 6)
                         D = D + block[1 + k] @ _selection(n, cols, 0)
@@ -249,11 +278,18 @@ class ShootingSolver:
             else:
                 starts[continued] = (main, D_outs[0] if derivatives else None)
             if outputs:
-                module_data.append(data + (self._base_wrench(m, x0, forces, params),))
+                module_data.append(data + (self._base_wrench(m, x0, forces, contact, params),))
         compat = [np.array(v, float) for v in self._compatibility(lengths, forces, params)]
         residuals.append(compat[0].ravel())
         if derivatives:
             jacobians.append(compat[1] @ length_D + compat[2] @ dF)
+        if self._contact.size:
+            states = np.column_stack([found[self._break_of[key]][0] for key in self._candidates])
+            conditions = [np.array(v, float) for v in self._conditions(states, contact, params)]
+            residuals.append(conditions[0].ravel())
+            if derivatives:
+                D_states = np.vstack([found[self._break_of[key]][1] for key in self._candidates])   # (13 k, n)
+                jacobians.append(conditions[1] @ D_states + conditions[2] @ dC)
         r = np.concatenate(residuals)
         dr = np.vstack(jacobians) if derivatives else None
         trajectory = None
@@ -262,11 +298,12 @@ class ShootingSolver:
                           list(forces), lengths)
         return r, dr, trajectory
 
-    def _integrate(self, m, x0, D0, forces, dF, params, outputs):
+    def _integrate(self, m, x0, D0, forces, dF, contact, dC, params, outputs, found):
         """Integrate module m from its base state ``x0`` (with ``D0 = dx0/dz`` when derivatives
-        are on; ``forces`` and ``dF`` of every actuator). Returns the end state and its
-        derivative, the actuator lengths and their derivatives, and (with ``outputs``)
-        ``(s, states (13, n) with xi* added, weights)``."""
+        are on; ``forces`` and ``dF`` of every actuator, ``contact`` and ``dC`` the contact
+        block's). Returns the end state and its derivative, the actuator lengths and their
+        derivatives, and (with ``outputs``) ``(s, states (13, n) with xi* added, weights)``;
+        records in ``found`` the state (and derivative) at each contact candidate of the module."""
         module = self.robot.modules[m]
         own = [self.robot.actuators.index(a) for a in module.actuators]
         scale = module.state_scale
@@ -279,8 +316,10 @@ class ShootingSolver:
         constants = module.stiffness_of(param)
         out_s, out_x, out_w = [], [], []
         for index, (s0, s1, active) in enumerate(self._segments[m]):
+            if (m, s0) in self._recorded:                    # the pose there (continuous across the jump)
+                found[(m, s0)] = (y[:STATE_SIZE] * scale, None if S is None else S[:STATE_SIZE] * scale[:, None])
             if index > 0:
-                y, S = self._jump(m, index - 1, y, S, scale, forces, dF, params)
+                y, S = self._jump(m, index - 1, y, S, scale, forces, dF, contact, dC, params)
             rhs = self._rhs[m][index]
             columns = [own[k] for k in active]
             F_act, dF_act = forces[columns], (None if dF is None else dF[columns].ravel(order="F"))
@@ -315,6 +354,9 @@ class ShootingSolver:
                 out_w.append(weights)
         end = y[:STATE_SIZE] * scale
         D_end = None if S is None else S[:STATE_SIZE] * scale[:, None]
+        last = self._segments[m][-1][1]
+        if (m, last) in self._recorded:
+            found[(m, last)] = (end, D_end)
         lengths = y[STATE_SIZE:] * module.length
         D_lengths = None if S is None else S[STATE_SIZE:] * module.length
         data = (np.concatenate(out_s), np.hstack(out_x), np.concatenate(out_w)) if outputs else None
@@ -327,25 +369,25 @@ class ShootingSolver:
             return self.atol
         return np.r_[np.full(size, self.atol), np.full(S.size, 1e-8)]
 
-    def _jump(self, m, b, y, S, scale, forces, dF, params):
+    def _jump(self, m, b, y, S, scale, forces, dF, contact, dC, params):
         """Scaled state (and sensitivities) after the b-th interior breakpoint of module m."""
         x_before = y[:STATE_SIZE] * scale
         jump = self._jumps[m][b]
-        values = jump(x_before, forces, params)
+        values = jump(x_before, forces, contact, params)
         x_after = np.array(values[0], float).ravel()
         y = np.r_[x_after / scale, y[STATE_SIZE:]]
         if S is not None:
             D_before = S[:STATE_SIZE] * scale[:, None]
-            D_after = np.array(values[1], float) @ D_before + np.array(values[2], float) @ dF
+            D_after = (np.array(values[1], float) @ D_before + np.array(values[2], float) @ dF
+                       + np.array(values[3], float) @ dC)
             S = np.vstack([D_after / scale[:, None], S[STATE_SIZE:]])
         return y, S
 
-    def _base_wrench(self, m, state, forces, params):
+    def _base_wrench(self, m, state, forces, contact, params):
         """``W(0-)`` of module m: internal wrench at its start plus the point wrenches there."""
-        robot = self.robot
-        tension = lambda a: forces[robot.actuators.index(a)]      # noqa: E731
-        param = lambda name: params[robot.layout[name]]             # noqa: E731
-        return _as_array(boundary.base_wrench(robot, m, state, tension, param))
+        if self._bases[m] is None:
+            self._bases[m] = _base_function(self.robot, m, self._contact)
+        return _as_array(self._bases[m](state, forces, contact, params))
 
 
 # ----------------------------------------------------------------------------- building blocks
@@ -423,6 +465,39 @@ def _symbols(robot):
     return forces, params, tension, param
 
 
+def _contact_symbols(robot, unknowns, param):
+    """The symbolic contact block (physical) and its ``contact_of`` for :mod:`.boundary`."""
+    block = ca.MX.sym("C", unknowns.size)
+    return block, unknowns.views(block).contact_of(robot, param)
+
+
+def contact_candidates(robot):
+    """``[(module, s)]`` of every contact candidate (obstacles and grips), in a fixed order: the
+    arc lengths at which a shot records the pose for the contact conditions."""
+    keys = [(c.module, c.s) for c in list(robot.contacts) + list(robot.grips)]
+    return list(dict.fromkeys(keys))
+
+
+def _nearest(points, s):
+    """The entry of ``points`` nearest ``s``."""
+    return min(points, key=lambda point: abs(point - s))
+
+
+def _conditions_function(robot, unknowns, candidates):
+    """Function ``(X (13, k), C, P) -> (residuals, d/d vec X, d/dC)`` of the contact block's
+    conditions (:func:`~tca_casadi.model.contact_unknowns.contact_conditions`) with the states
+    ``X`` at ``candidates``; None without contact."""
+    if not unknowns.size:
+        return None
+    states = ca.MX.sym("X", STATE_SIZE, len(candidates))
+    _, params, _, param = _symbols(robot)
+    block, _ = _contact_symbols(robot, unknowns, param)
+    where = {key: k for k, key in enumerate(candidates)}
+    r = ca.vertcat(*contact_conditions(robot, unknowns.views(block), lambda m, s: states[:, where[(m, s)]], param))
+    return ca.Function("contact_conditions", [states, block, params],
+                       [r, ca.jacobian(r, ca.vec(states)), ca.jacobian(r, block)])
+
+
 def _strains_after(robot, m, s, before_pose, target, tension, param):
     """Deviation strains just after s solving ``K dxi + (point wrenches after s)(dxi) = target``
     (a CasADi rootfinder when actuators pull there with the tangent after s; else explicit)."""
@@ -448,46 +523,59 @@ def _strains_after(robot, m, s, before_pose, target, tension, param):
     return solver(target / boundary.stiffness(module, param), ca.vertcat(before_pose, target, forces_all, params_all))
 
 
-def _jump_function(robot, m, s):
-    """Function ``(x_before, F, P) -> (x_after, dx_after/dx_before, dx_after/dF)`` at an
-    interior breakpoint s of module m: ``K (xi+ - xi-) + point wrenches = 0``."""
+def _jump_function(robot, m, s, unknowns):
+    """Function ``(x_before, F, C, P) -> (x_after, dx_after/dx_before, dx_after/dF,
+    dx_after/dC)`` at an interior breakpoint s of module m: ``K (xi+ - xi-) + point wrenches = 0``
+    (contact forces at s among them)."""
     module = robot.modules[m]
     x_before = ca.MX.sym("x", STATE_SIZE)
     forces, params, tension, param = _symbols(robot)
-    rest = boundary.point_wrenches(robot, m, s, x_before, None, tension, param)
+    block, contact_of = _contact_symbols(robot, unknowns, param)
+    rest = boundary.point_wrenches(robot, m, s, x_before, None, tension, param, contact_of)
     target = boundary.add(boundary.internal_wrench(module, x_before, param), None if rest is None else -rest)
     strains = _strains_after(robot, m, s, x_before[0:7], target, tension, param)
     x_after = ca.vertcat(x_before[0:7], strains)
-    return ca.Function(f"jump_{m}", [x_before, forces, params],
-                       [x_after, ca.jacobian(x_after, x_before), ca.jacobian(x_after, forces)])
+    return ca.Function(f"jump_{m}", [x_before, forces, block, params],
+                       [x_after, ca.jacobian(x_after, x_before), ca.jacobian(x_after, forces),
+                        ca.jacobian(x_after, block)])
 
 
-def _end_function(robot, m, free):
-    """Function ``(x_end, strains of each free child, F, P) -> (main, starts of the free children,
-    then the Jacobian blocks of each output: d/d x_end, d/d each strain, d/d F)``. ``main`` is
-    the scaled tip balance of module m, or the start state of its continued child."""
+def _end_function(robot, m, free, unknowns):
+    """Function ``(x_end, strains of each free child, F, C, P) -> (main, starts of the free
+    children, then the Jacobian blocks of each output: d/d x_end, d/d each strain, d/d F, d/d C)``.
+    ``main`` is the scaled tip balance of module m, or the start state of its continued child."""
     module = robot.modules[m]
     end = ca.MX.sym("end", STATE_SIZE)
     forces, params, tension, param = _symbols(robot)
+    block, contact_of = _contact_symbols(robot, unknowns, param)
     children = [c for c in robot.children(m) if c in free]
     strains = [ca.MX.sym(f"z{c}", 6) for c in children]
     starts = []
     for c, strain in zip(children, strains):
         position, quaternion = boundary.junction_pose(end, robot.modules[c])
         starts.append(ca.vertcat(position, quaternion, strain))
-    balance = boundary.tip_balance(robot, m, end, dict(zip(children, starts)), tension, param)
+    balance = boundary.tip_balance(robot, m, end, dict(zip(children, starts)), tension, param, contact=contact_of)
     continued = _continued_child(robot, m, free)
     if continued is None:
         main = balance * ca.DM(module.wrench_scale)
     else:
-        main = _junction_start(robot, end, balance, continued, tension, param)
+        main = _junction_start(robot, end, balance, continued, tension, param, contact_of)
     outputs = [main] + starts
-    inputs = [end] + strains + [forces]
+    inputs = [end] + strains + [forces, block]
     jacobians = [ca.jacobian(out, given) for out in outputs for given in inputs]
-    return ca.Function(f"end_{m}", [end] + strains + [forces, params], outputs + jacobians)
+    return ca.Function(f"end_{m}", [end] + strains + [forces, block, params], outputs + jacobians)
 
 
-def _junction_start(robot, end, balance, c, tension, param):
+def _base_function(robot, m, unknowns):
+    """Function ``(start, F, C, P) -> W(0-)`` of module m (:func:`~tca_casadi.model.boundary.base_wrench`)."""
+    start = ca.MX.sym("start", STATE_SIZE)
+    forces, params, tension, param = _symbols(robot)
+    block, contact_of = _contact_symbols(robot, unknowns, param)
+    wrench = boundary.base_wrench(robot, m, start, tension, param, contact=contact_of)
+    return ca.Function(f"base_{m}", [start, forces, block, params], [wrench])
+
+
+def _junction_start(robot, end, balance, c, tension, param, contact_of=None):
     """Base state of the coupled child c whose base wrench must equal what the parent's tip
     balance leaves (``balance``, parent tip frame; SPEC section 5)."""
     child = robot.modules[c]
@@ -496,7 +584,7 @@ def _junction_start(robot, end, balance, c, tension, param):
     transmitted = boundary.untransmit(balance if weight is None else balance - weight, child)
     pose = ca.vertcat(position, quaternion)
     state = ca.vertcat(pose, ca.MX.zeros(6))
-    loads = boundary.point_wrenches(robot, c, 0.0, state, None, tension, param)
+    loads = boundary.point_wrenches(robot, c, 0.0, state, None, tension, param, contact_of)
     target = transmitted if loads is None else transmitted - loads
     return ca.vertcat(pose, _strains_after(robot, c, 0.0, pose, target, tension, param))
 

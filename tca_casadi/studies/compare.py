@@ -36,10 +36,22 @@ class CheckReport(ResultAPI):
     tension_tolerance: float = TENSION_TOLERANCE
     accuracy: dict = field(default_factory=dict)     # method -> its error estimate (if any)
     warnings: dict = field(default_factory=dict)     # method -> [PhysicsWarning text, ...]
+    #: per closed contact (in either solution) "MODULE s=... mm / OBSTACLE": both total contact
+    #: forces (3,) [N], absolute and relative difference (relative as tensions are)
+    contact_differences: dict = field(default_factory=dict)
+    #: per free body its position difference [m]
+    body_differences: dict = field(default_factory=dict)
+    #: where the second solve started: ``reference`` (continuation from the unloaded state, an
+    #: independent solve) or ``collocation`` (its solution: robots with free bodies)
+    shooting_start: str = "reference"
 
     @property
     def worst_relative_tension(self):
         return max((d["relative"] for d in self.tension_differences.values()), default=0.0)
+
+    @property
+    def worst_relative_contact(self):
+        return max((d["relative"] for d in self.contact_differences.values()), default=0.0)
 
     @property
     def agree(self):
@@ -48,7 +60,9 @@ class CheckReport(ResultAPI):
                 and self.tip_position_difference <= self.position_tolerance
                 and self.max_centerline_distance <= self.position_tolerance
                 and self.worst_relative_tension <= self.tension_tolerance
-                and max(self.slack_differences.values(), default=0.0) <= self.position_tolerance)
+                and self.worst_relative_contact <= self.tension_tolerance
+                and max(self.slack_differences.values(), default=0.0) <= self.position_tolerance
+                and max(self.body_differences.values(), default=0.0) <= self.position_tolerance)
 
     @property
     def result(self):
@@ -101,11 +115,20 @@ class CheckReport(ResultAPI):
                          f"(relative {d['relative']:.2e})")
         for key, d in self.slack_differences.items():
             lines.append(f"  {key:<24} slack length difference {d:.3e} m")
+        for key, d in self.contact_differences.items():
+            lines.append(f"  contact {key}: |f| {np.linalg.norm(d[a]) * 1e3:.6f} mN vs "
+                         f"{np.linalg.norm(d[b]) * 1e3:.6f} mN (relative {d['relative']:.2e})")
+        for key, d in self.body_differences.items():
+            lines.append(f"  {key:<24} position difference {d:.3e} m")
         for method, estimate in self.accuracy.items():
             lines.append(f"  {method} error estimate: tip {estimate['tip_error_estimate']:.1e} m, tensions "
                          f"{estimate['tension_error_estimate']:.1e} ({'met' if estimate['met'] else 'NOT met'}; "
                          f"{'+'.join(map(str, estimate['intervals']))} intervals)")
         lines.append("  solve time: " + ", ".join(f"{k} {v:.3f} s" for k, v in self.solve_times_s.items()))
+        if self.shooting_start != "reference":
+            lines.append(f"  {b} started from the {self.shooting_start} solution at its parameters (free bodies "
+                         "have no rest pose to start from; friction's history is the path's); it converged on its "
+                         "own equations")
         lines += [f"  warning ({method}): {text}" for method, texts in self.warnings.items() for text in texts]
         return "\n".join(lines)
 
@@ -127,7 +150,11 @@ def compare_solutions(first, second, position_tolerance=POSITION_TOLERANCE,
                          "relative": abs(ta - tb) / max(abs(ta), abs(tb), floor)}
         if actuator.slack_length is not None:
             slack[key] = abs(actuator.slack_length - other.slack_length)
+    contacts = _contact_differences(first, second, floor)
+    bodies = {f"object {body.name}": float(np.linalg.norm(np.asarray(body.position) - np.asarray(other.position)))
+              for body, other in zip(first.bodies, second.bodies)}
     return CheckReport(
+        contact_differences=contacts, body_differences=bodies,
         scenario=first.scenario_name, methods=(a, b),
         converged={a: bool(first.converged), b: bool(second.converged)},
         tip_position_difference=float(np.linalg.norm(first.tip_position - second.tip_position)),
@@ -137,6 +164,23 @@ def compare_solutions(first, second, position_tolerance=POSITION_TOLERANCE,
         position_tolerance=position_tolerance, tension_tolerance=tension_tolerance,
         accuracy={s.method: s.accuracy.as_dict() for s in (first, second) if s.accuracy is not None},
         warnings={s.method: s.warning_texts() for s in (first, second)})
+
+
+def _contact_differences(first, second, floor):
+    """Per closed contact of either solution (matched by module, arc length and what it
+    touches; absent: zero force) both forces (3,) [N] and their absolute and relative
+    difference (relative to the larger, floored at ``floor`` [N] as tensions are)."""
+    def forces(solution):
+        return {(c.module, round(c.s, 12), c.obstacle): np.asarray(c.force, float) for c in solution.contacts}
+    fa, fb = forces(first), forces(second)
+    out = {}
+    for key in sorted(set(fa) | set(fb)):
+        va, vb = fa.get(key, np.zeros(3)), fb.get(key, np.zeros(3))
+        difference = float(np.linalg.norm(va - vb))
+        out[f"{key[0]} s={key[1] * 1e3:.4g} mm / {key[2]}"] = {
+            first.method: va.tolist(), second.method: vb.tolist(), "absolute": difference,
+            "relative": difference / max(float(np.linalg.norm(va)), float(np.linalg.norm(vb)), floor)}
+    return out
 
 
 def _centerline_distance(ma, mb):
@@ -152,13 +196,30 @@ def _centerline_distance(ma, mb):
     return worst
 
 
+def solve_by_shooting(simulation, collocation):
+    """``(solution, start)``: ``simulation`` solved by shooting from the unloaded reference state
+    (``start`` ``"reference"``: continuation, independent of collocation) or, for a robot with
+    free bodies or friction, at ``collocation``'s parameters from its solution
+    (``"collocation"``): a free body has no rest pose to continue from (without its weight
+    nothing holds it where it is), and with friction the equilibrium depends on the path, which
+    the parameters' contact history records as collocation left it; shooting then converges on
+    its own equations."""
+    robot = simulation.robot
+    if (robot.bodies or robot.path_dependent) and collocation.converged:
+        solver = simulation.solver("shooting")
+        return solver.solve(collocation.parameters, collocation), "collocation"
+    return simulation.solve(method="shooting", warn=False), "reference"
+
+
 def check(simulation, position_tolerance=POSITION_TOLERANCE, tension_tolerance=TENSION_TOLERANCE):
     """Solve ``simulation`` by collocation and (independently, from a cold start) by shooting.
-    The solutions' warnings are in the report (not issued). The shooting solver is built first,
-    so that what it cannot model (contact) stops the check before any solve."""
-    shooting_solver = simulation.solver("shooting")
+    The solutions' warnings are in the report (not issued). The shooting solver is built after
+    the collocation solve, on the robot it leaves (with the contact candidates it localised), so
+    that both solve for forces at the same points."""
     collocation = simulation.solve(method="collocation", warn=False)
+    shooting_solver = simulation.solver("shooting")
     shooting_solver.sample_s = [m.s for m in collocation.modules]
-    shooting = simulation.solve(method="shooting", warn=False)
+    shooting, start = solve_by_shooting(simulation, collocation)
     report = compare_solutions(collocation, shooting, position_tolerance, tension_tolerance)
+    report.shooting_start = start
     return report, collocation, shooting

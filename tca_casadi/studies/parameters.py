@@ -21,6 +21,7 @@ import numpy as np
 
 from ..errors import ScenarioError
 from ..scenario.checks import closest
+from ..scenario.written import written_value as scenario_written
 from ..units import UNIT_OF, in_unit, readable_unit, to_si, unit_given, unit_text
 
 COMPONENTS = {"x": 0, "y": 1, "z": 2, "[0]": 0, "[1]": 1, "[2]": 2, "[3]": 3}
@@ -182,30 +183,12 @@ def check_range(robot, parameter, *values, params=None):
             raise ScenarioError(problem)
 
 
-#: raw scenario lists whose items are addressed by name in a parameter path
-_NAMED_LISTS = ("modules", "actuators", "loads", "objects", "obstacles")
-
-
 def written_value(scenario, parameter):
-    """What the scenario file wrote for ``parameter`` (``"0.5 mm"``, ``125000``), or None where the
-    path does not lead to one value (a default, a vector's magnitude). Walks the raw YAML by the
-    layout name: mapping keys, and items of the named lists by their ``name``."""
-    current = getattr(scenario, "_raw", None)
-    for key in parameter.name.split("."):
-        if isinstance(current, dict) and key in current:
-            current = current[key]
-            continue
-        lists = [current.get(name) for name in _NAMED_LISTS] if isinstance(current, dict) else []
-        items = [item for group in lists if isinstance(group, list) for item in group
-                 if isinstance(item, dict) and item.get("name") == key]
-        if not items:
-            return None
-        current = items[0]
-    if isinstance(current, list):
-        index = np.flatnonzero(parameter.direction == 1.0)
-        inside = len(current) == len(parameter.direction) and index.size == 1
-        current = current[int(index[0])] if inside else None
-    return current if isinstance(current, (str, int, float)) and not isinstance(current, bool) else None
+    """What the scenario file wrote for ``parameter`` (``"0.5 mm"``, ``125000``), or None
+    (:func:`tca_casadi.scenario.written.written_value`; a vector's component by its direction)."""
+    index = np.flatnonzero(parameter.direction == 1.0)
+    return scenario_written(scenario, parameter.name, int(index[0]) if index.size == 1 else None,
+                            parameter.direction.size)
 
 
 def shown_as_given(parameter, scenario, *given, values=()):

@@ -15,7 +15,7 @@ from ..errors import PhysicsWarning, ScenarioError
 from ..results import ResultAPI, status_of
 from ..simulation import _failure_text
 from ..solvers.continuation import BranchFollower
-from .compare import compare_solutions
+from .compare import compare_solutions, solve_by_shooting
 from ..model.history import carried_history
 from ..solvers.assemble import record_slides
 from .objects import ObjectTracker
@@ -78,6 +78,7 @@ class SequenceResult(ResultAPI):
                 row["shooting_tip_difference [m]"] = self.checks[index].tip_position_difference
                 row["shooting_centerline_difference [m]"] = self.checks[index].max_centerline_distance
                 row["shooting_tension_difference [-]"] = self.checks[index].worst_relative_tension
+                row["shooting_contact_difference [-]"] = self.checks[index].worst_relative_contact
             out.append(row)
         return out
 
@@ -151,7 +152,8 @@ def run_sequence(sim, steps=None, frames_per_step=0, progress=None, check=False)
     ``frames_per_step``: also keep that many intermediate solutions of each transition (equal
     steps in the continuation parameter), for animations. ``check``: solve every step by
     shooting too (each shot started from the previous step's shooting solution, independent of
-    collocation) and compare. ``progress(fraction, text)``."""
+    collocation; with friction or free objects, whose equilibria depend on the path, from the
+    step's collocation solution) and compare. ``progress(fraction, text)``."""
     steps = steps if steps is not None else (sim.scenario.sequence or [])
     if not steps:
         raise ScenarioError("the scenario has no sequence: steps (a list of {name, set: {PATH: value}})")
@@ -159,7 +161,7 @@ def run_sequence(sim, steps=None, frames_per_step=0, progress=None, check=False)
     result = SequenceResult([], [])
     tracker = ObjectTracker(sim.scenario, sim.robot)
     previous = sim.solve(method="collocation", warn=False)
-    shot = sim.solve(method="shooting", warn=False) if check else None
+    shot = solve_by_shooting(sim, previous)[0] if check else None
     for index, step in enumerate(steps):
         name, values = (step.name, step.set) if hasattr(step, "name") else (step["name"], step.get("set", {}))
         before = sim.params.copy()
@@ -208,15 +210,26 @@ def _track_objects(result, tracker, solution, name):
 
 
 def _check_step(sim, result, solution, shot):
-    """Shooting at this step's parameters from the previous shooting solution; the comparison."""
+    """Shooting at this step's parameters from the previous shooting solution (with friction or
+    free objects: from this step's collocation solution); the comparison."""
     shooting = sim.solver("shooting")
     shooting.sample_s = [m.s for m in solution.modules]
-    other = shooting.solve(sim.params, initial=shot if shot is not None and shot.converged else None)
+    # at the parameters this step's collocation solution was found at: with friction the history
+    # carried after it (where each contact sticks now) is the next step's, not this one's
+    params = solution.parameters
+    if sim.robot.path_dependent:
+        # with friction the equilibrium depends on the path: a jump from the previous step's shot
+        # may land on another (a lifted gripper leaving its object behind is one); collocation
+        # followed the step's path, so shooting starts where it ended and converges on its own
+        other = shooting.solve(params, initial=solution)
+        result.checks.append(compare_solutions(solution, other))
+        return other
+    other = shooting.solve(params, initial=shot if shot is not None and shot.converged else None)
     if not other.converged:
         result.warnings.append(PhysicsWarning("sequence", f"step {result.names[-1]!r}: shooting did not converge "
                                               "from the previous step's shooting solution; started it from this "
                                               "step's collocation solution"))
-        other = shooting.solve(sim.params, initial=solution)
+        other = shooting.solve(params, initial=solution)
     result.checks.append(compare_solutions(solution, other))
     return other
 

@@ -225,10 +225,13 @@ def test_bad_boxes_and_contact_points_are_errors():
         Simulation.from_file(pushed({"at": {"rod": ["200 mm"]}}))
 
 
-def test_shooting_and_dynamics_refuse_contact_with_a_clear_message():
-    sim = Simulation.from_file(pushed())
-    with pytest.raises(ScenarioError, match="shooting solver does not model contact"):
-        sim.solve(method="shooting")
+def test_dynamics_refuses_contact_with_a_clear_message():
+    scenario = pushed()
+    scenario["materials"]["m"]["density"] = 1100
+    sim = Simulation.from_file(dict(scenario, dynamics={"enabled": True}, duration=0.01))
+    from tca_casadi.studies.timeline import TimeSimulation
+    with pytest.raises(ScenarioError, match="rod dynamics with contact is not modelled"):
+        TimeSimulation(sim, dt=0.005).run()
 
 
 def test_cli_exits_2_on_an_intersecting_obstacle(tmp_path):

@@ -6,7 +6,6 @@ example names something in a shipped scenario.
 Long runs (the test command itself, installs, benchmarks, the arm's ``--check`` sequence) are
 listed in ``SKIPPED`` and run elsewhere (CI, ``scripts/``)."""
 import re
-import shlex
 import shutil
 import subprocess
 import sys
@@ -15,6 +14,8 @@ from pathlib import Path
 import pytest
 
 from tca_casadi import cli
+
+from transcripts import fenced_blocks, run_transcript, transcripts
 
 ROOT = Path(__file__).resolve().parents[2]
 README = (ROOT / "README.md").read_text()
@@ -26,17 +27,7 @@ SKIPPED = ("pip install", "python3 -m venv", "python -m pytest", "python scripts
 
 def _all_blocks():
     """``[(language, text)]`` of every fenced block, in order."""
-    blocks, current, language = [], None, None
-    for line in README.splitlines():
-        if line.startswith("```"):
-            if current is None:
-                current, language = [], line[3:].strip()
-            else:
-                blocks.append((language, "\n".join(current) + "\n"))
-                current = None
-        elif current is not None:
-            current.append(line)
-    return blocks
+    return fenced_blocks(README)
 
 
 def _blocks(language):
@@ -45,19 +36,7 @@ def _blocks(language):
 
 def _transcripts():
     """``(command, expected output lines)`` of every ``$ tca-casadi`` line in plain blocks."""
-    out = []
-    for block in _blocks(""):
-        lines = block.splitlines()
-        for k, line in enumerate(lines):
-            if line.startswith("$ "):
-                expected = []
-                for following in lines[k + 1:]:
-                    if following.startswith("$ "):
-                        break
-                    expected.append(following)
-                command = line[2:].split("  #")[0].strip()
-                out.append((command, expected))
-    return out
+    return transcripts(README)
 
 
 def _skipped(command):
@@ -73,26 +52,10 @@ def workdir(tmp_path_factory):
     return directory
 
 
-def _matches(expected, actual):
-    pattern = "^" + ".*".join(re.escape(part) for part in expected.split("...")) + "$"
-    return re.match(pattern, actual) is not None
-
-
 @pytest.mark.parametrize("command, expected", [t for t in _transcripts() if not _skipped(t[0])],
                          ids=lambda value: value if isinstance(value, str) else "")
 def test_transcript(workdir, command, expected):
-    argv = shlex.split(command)
-    assert argv[0] == "tca-casadi"
-    result = subprocess.run([sys.executable, "-m", "tca_casadi.cli", *argv[1:]], cwd=workdir,
-                            capture_output=True, text=True, timeout=600)
-    output = (result.stdout + result.stderr).rstrip("\n").splitlines()
-    errors = [line for line in expected if line.startswith("error:")]
-    if errors:
-        assert result.returncode == 2 and output == errors, "\n".join(output)
-        return
-    assert result.returncode in (0, 1), result.stderr
-    for line in expected:
-        assert any(_matches(line, got) for got in output), f"{line!r} not in:\n" + "\n".join(output)
+    run_transcript(workdir, command, expected)
 
 
 @pytest.mark.parametrize("block", [b for b in _blocks("bash")],

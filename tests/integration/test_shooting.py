@@ -8,7 +8,6 @@ from builders import mixed_chain, robot, rod, tca
 from conftest import SCENARIOS
 from tca_casadi import Simulation
 from tca_casadi.cli import main
-from tca_casadi.errors import ScenarioError
 from tca_casadi.solvers import shooting
 from tca_casadi.studies import check
 
@@ -20,19 +19,22 @@ def assert_agree(report):
     assert report.tip_position_difference < 1e-6
     assert report.max_centerline_distance < 1e-6
     assert report.worst_relative_tension < 1e-5
+    assert report.worst_relative_contact < 1e-5
+    assert max(report.body_differences.values(), default=0.0) < 1e-6
     assert report.agree
 
 
 @pytest.mark.parametrize("path", SHIPPED, ids=[p.stem for p in SHIPPED])
 def test_every_shipped_scenario_agrees(path):
+    """Contact scenarios included (issue 33): their closed contacts' forces and objects' positions
+    are compared too."""
     sim = Simulation.from_file(path, allow_code=True)
-    if sim.robot.obstacles:               # contact is collocation's alone (issue 17): said, not skipped
-        with pytest.raises(ScenarioError, match="shooting solver does not model contact"):
-            check(sim)
-        return
     report, collocation, shooting = check(sim)
     assert_agree(report)
     assert collocation.method == "collocation" and shooting.method == "shooting"
+    assert len(report.contact_differences) == len({(c.module, c.s, c.obstacle) for c in collocation.contacts}
+                                                  | {(c.module, c.s, c.obstacle) for c in shooting.contacts})
+    assert report.shooting_start == ("collocation" if sim.robot.path_dependent else "reference")
 
 
 CHAINS = {

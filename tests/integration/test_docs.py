@@ -1,0 +1,82 @@
+"""The documentation site (issue 37): it builds with warnings as errors, its scenario reference
+(generated from the schema) names every key of every section with its unit, and every
+tutorial's commands and Python run and print what the page shows."""
+import shutil
+import subprocess
+import sys
+import typing
+from pathlib import Path
+
+import pytest
+
+from transcripts import fenced_blocks, run_transcript, transcripts
+
+ROOT = Path(__file__).resolve().parents[2]
+TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("*.md"))
+
+
+def test_the_site_builds_with_warnings_as_errors(tmp_path):
+    run = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-f", str(ROOT / "mkdocs.yml"),
+                          "-d", str(tmp_path / "site")], capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert run.returncode == 0, run.stderr[-3000:]
+    site = tmp_path / "site"
+    for page in ("index.html", "scenario/index.html", "api/index.html", "tutorials/solve/index.html",
+                 "gallery/index.html", "architecture/index.html"):
+        assert (site / page).is_file(), page
+    assert not (site / "hooks.py").exists()
+    api = (site / "api" / "index.html").read_text()
+    assert "doc-class" in api and "InverseStatics" in api and "ContactUnknowns" in api
+
+
+def test_the_scenario_reference_names_every_key_with_its_unit():
+    """Every field of every model reachable from Scenario has a row; quantities carry their SI
+    unit, bounds their range."""
+    from pydantic import BaseModel
+    from tca_casadi.scenario.reference import scenario_reference
+    from tca_casadi.scenario.schema import Scenario
+    text = scenario_reference()
+    seen, queue = set(), [Scenario]
+    while queue:
+        model = queue.pop()
+        if model in seen:
+            continue
+        seen.add(model)
+        section = text.split(f"### `{model.__name__}`")[1].split("\n### ")[0]
+        for name, field in model.model_fields.items():
+            assert f"| `{name}` |" in section, (model.__name__, name)
+
+            def models(annotation):
+                if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+                    return [annotation]
+                return [m for arg in typing.get_args(annotation) for m in models(arg)]
+            queue.extend(models(field.annotation))
+    assert len(seen) > 30
+    assert "| `youngs_modulus` | number | Pa | **required** | > 0 |" in text
+    assert "| `ambient_temperature` | number | degC | `25` | >= -273.15 | the air (or body) the TCAs exchange heat" in text
+
+
+@pytest.fixture(scope="module")
+def workdir(tmp_path_factory):
+    directory = tmp_path_factory.mktemp("tutorials")
+    for name in ("scenarios", "data"):
+        shutil.copytree(ROOT / name, directory / name)
+    return directory
+
+
+STEPS = [(page.name, command, expected) for page in TUTORIALS for command, expected in transcripts(page.read_text())]
+PYTHON = [(page.name, k, text) for page in TUTORIALS
+          for k, text in enumerate(t for kind, t in fenced_blocks(page.read_text()) if kind == "python")]
+
+
+@pytest.mark.parametrize("page, command, expected", STEPS, ids=[f"{p}: {c[:70]}" for p, c, _ in STEPS])
+def test_tutorial_commands_run(workdir, page, command, expected):
+    run_transcript(workdir, command, expected)
+
+
+@pytest.mark.parametrize("page, index, code", PYTHON, ids=[f"{p} python {k}" for p, k, _ in PYTHON])
+def test_tutorial_python_runs(workdir, page, index, code, monkeypatch):
+    import matplotlib
+    matplotlib.use("Agg")
+    monkeypatch.chdir(workdir)
+    exec(compile(code, f"{page} python block {index}", "exec"), {"__name__": "tutorial"})
+    matplotlib.pyplot.close("all")

@@ -1,0 +1,64 @@
+"""Runnable documentation: the fenced blocks of a Markdown text, its ``$ tca-casadi`` transcripts,
+and running one in a fresh process, comparing its output with what the text shows (``...``
+stands for what varies between runs; an ``error:`` line must be the whole output, exit 2). Used
+by the README's test and the documentation site's tutorials."""
+import re
+import shlex
+import subprocess
+import sys
+
+
+def fenced_blocks(text):
+    """``[(language, text)]`` of every fenced block, in order."""
+    blocks, current, language = [], None, None
+    for line in text.splitlines():
+        if line.startswith("```"):
+            if current is None:
+                current, language = [], line[3:].strip()
+            else:
+                blocks.append((language, "\n".join(current) + "\n"))
+                current = None
+        elif current is not None:
+            current.append(line)
+    return blocks
+
+
+def transcripts(text):
+    """``(command, expected output lines)`` of every ``$ tca-casadi`` line in plain blocks."""
+    out = []
+    for kind, block in fenced_blocks(text):
+        if kind:
+            continue
+        lines = block.splitlines()
+        for k, line in enumerate(lines):
+            if line.startswith("$ "):
+                expected = []
+                for following in lines[k + 1:]:
+                    if following.startswith("$ "):
+                        break
+                    expected.append(following)
+                out.append((line[2:].split("  #")[0].strip(), expected))
+    return out
+
+
+def matches(expected, actual):
+    """Whether an output line matches a shown one (``...``: anything)."""
+    pattern = "^" + ".*".join(re.escape(part) for part in expected.split("...")) + "$"
+    return re.match(pattern, actual) is not None
+
+
+def run_transcript(workdir, command, expected):
+    """Run ``command`` (``tca-casadi ...``) in ``workdir`` in a fresh process; assert its output
+    shows every ``expected`` line (or, for ``error:`` lines, is exactly them, exit 2)."""
+    argv = shlex.split(command)
+    assert argv[0] == "tca-casadi"
+    result = subprocess.run([sys.executable, "-m", "tca_casadi.cli", *argv[1:]], cwd=workdir,
+                            capture_output=True, text=True, timeout=600)
+    output = (result.stdout + result.stderr).rstrip("\n").splitlines()
+    errors = [line for line in expected if line.startswith("error:")]
+    if errors:
+        assert result.returncode == 2 and output == errors, "\n".join(output)
+        return
+    assert result.returncode in (0, 1), result.stderr
+    for line in expected:
+        assert any(matches(line, got) for got in output), f"{line!r} not in:\n" + "\n".join(output)
