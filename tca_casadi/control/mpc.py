@@ -29,6 +29,7 @@ import numpy as np
 
 from ..errors import ScenarioError, SolverError
 from ..results import ResultAPI, status_of
+from ..studies.timeline import mpc_drives  # noqa: F401  (re-exported)
 from .plan import HeatingRecord, Plan, _NoEquilibrium, held_from, read_path
 
 #: the tip error is integrated only within this many tolerances of the target (anti-windup)
@@ -143,13 +144,6 @@ class ClosedLoopResult(ResultAPI, HeatingRecord):
     def to_csv(self, path):
         from ..output import write_csv
         return write_csv(path, self.header(), self.rows())
-
-
-def mpc_drives(scenario):
-    """``[(MODULE.TCA, drive)]`` of the scenario's ``kind: mpc`` drives."""
-    return [(f"{module.name}.{actuator.name}", actuator.drive) for module in scenario.modules
-            for actuator in module.actuators
-            if getattr(actuator, "drive", None) is not None and actuator.drive.kind == "mpc"]
 
 
 class ClosedLoop:

@@ -529,7 +529,7 @@ class Plan:
             import casadi as ca
 
             from ..model.rotations import rotation_matrix
-            from ..solvers.newton import BufferedFunction, CscPattern
+            from ..buffers import BufferedFunction, CscPattern
             nlp = self._equilibria[0].nlp
             w, P = ca.SX.sym("w", nlp.w.numel()), ca.SX.sym("P", nlp.P.numel())
             ends = nlp.outputs.expand()(w, P)[1]

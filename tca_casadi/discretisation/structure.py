@@ -88,7 +88,7 @@ class StructuredJacobian:
         self._buffers = None
 
     def __call__(self, w, P):
-        from ..solvers.newton import BufferedFunction
+        from ..buffers import BufferedFunction
         if self._buffers is None:
             self._buffers = BufferedFunction(self.function)
         g, dG_dz, dG_dY, dI_dz, *blocks = self._buffers(w, P)

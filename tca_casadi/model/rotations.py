@@ -42,7 +42,7 @@ ROTATION = ca.Function("rotation", [_h], [rotation_matrix(_h)], ["h"], ["R"])
 
 @functools.lru_cache(maxsize=64)
 def _mapped_rotation(n):
-    from ..solvers.newton import BufferedFunction
+    from ..buffers import BufferedFunction
     return BufferedFunction(ROTATION.map(n))
 
 

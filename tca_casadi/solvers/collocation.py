@@ -15,13 +15,12 @@ from . import accuracy
 from ..model.contact import gaps, outline_of
 from .assemble import build_solution
 from .guess import reference_guess
-from .newton import BufferedFunction, SquareSystem
+from ..buffers import BufferedFunction
+from .newton import MEMORY_ADVICE, SquareSystem
 
 log = logging.getLogger(__name__)
 
 #: what to change when a robot's NLP does not fit in memory
-MEMORY_ADVICE = ("lower solver.max_intervals or solver.intervals (or loosen solver.tip_tolerance and "
-                 "tension_tolerance, which drive the refinement), or use a machine with more memory")
 #: samples per interval where contact gaps are checked between the nodes
 FINE_SAMPLES = 16
 #: built solvers kept for reuse, by (scenario name, structure key, meshes, degree); the oldest go

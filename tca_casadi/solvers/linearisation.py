@@ -6,13 +6,56 @@ Jacobian's determinant and its smallest singular value, which show folds).
 """
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import connected_components
+
+#: COLAMD's column order is used when its LU fill is below this fraction of the natural order's
+COLAMD_FILL = 0.5
+
+
+class OrderedLU:
+    """SuperLU factors of ``J[:, order]`` (natural order on the reordered columns; ``order`` None:
+    J's own), solving in J's coordinates: ``solve(b)`` gives ``x`` with ``J x = b`` (``b``: (n,)
+    or (n, k)), ``trans="T"`` with ``J^T x = b``."""
+
+    def __init__(self, J, order=None):
+        self.order = order
+        self.factors = spla.splu(J if order is None else J[:, order].tocsc(), permc_spec="NATURAL")
+
+    def solve(self, b, trans="N"):
+        if self.order is None:
+            return self.factors.solve(b, trans=trans)
+        if trans == "T":                     # (J Q)^T y = Q^T b: the rows of b in the new order
+            return self.factors.solve(np.ascontiguousarray(b[self.order]), trans="T")
+        permuted = self.factors.solve(b)
+        x = np.empty_like(permuted)
+        x[self.order] = permuted
+        return x
+
+    @property
+    def fill(self):
+        """Nonzeros of the factors L and U."""
+        return self.factors.L.nnz + self.factors.U.nnz
+
+
+def column_order(J, banded=None):
+    """The column order :class:`OrderedLU` uses for Jacobians with ``J``'s pattern: ``banded``
+    (the NLP's block-banded order, :meth:`CollocationNLP.banded_columns`; None: J's own) or
+    COLAMD's permutation when that roughly halves the fill (:data:`COLAMD_FILL`; a tree of
+    modules, whose branches the banded order puts one after the other)."""
+    first = OrderedLU(J, banded)
+    colamd = spla.splu(J, permc_spec="COLAMD")
+    if colamd.L.nnz + colamd.U.nnz >= COLAMD_FILL * first.fill:
+        return banded
+    order = np.empty_like(colamd.perm_c)
+    order[colamd.perm_c] = np.arange(colamd.perm_c.size)
+    return order
 
 
 class Linearisation:
     """``g``, ``J_w = dg/dw`` (sparse, square), ``J_P = dg/dP`` and ``T_w, T_P``: the derivatives
     of the tip position [m] at one point ``(w, P)``; ``factorise(J_w)``: the system's sparse LU
-    (an :class:`~tca_casadi.solvers.newton.OrderedLU`; default in J_w's own column order)."""
+    (an :class:`OrderedLU`; default in J_w's own column order)."""
 
     def __init__(self, g, J_w, J_P, T_w, T_P, factorise=None):
         self.g, self.J_w, self.J_P, self.T_w, self.T_P = g, J_w.tocsc(), J_P.tocsc(), T_w, T_P
@@ -23,7 +66,6 @@ class Linearisation:
     def lu(self):
         """Sparse LU of ``J_w`` (an OrderedLU), computed once."""
         if self._lu is None:
-            from .newton import OrderedLU
             self._lu = (self._factorise or OrderedLU)(self.J_w)
         return self._lu
 

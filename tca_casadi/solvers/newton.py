@@ -12,11 +12,14 @@ import time
 
 import casadi as ca
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
+from ..buffers import BufferedFunction, CscPattern  # noqa: F401  (re-exported: the solvers' evaluation)
 from ..status import SolveStatus, Status
-from .linearisation import Linearisation
+from .linearisation import Linearisation, OrderedLU, column_order  # noqa: F401
+
+#: what to do when the Jacobian's factorisation runs out of memory
+MEMORY_ADVICE = ("lower solver.max_intervals or solver.intervals (or loosen solver.tip_tolerance and "
+                 "tension_tolerance, which drive the refinement), or use a machine with more memory")
 
 
 #: a chord step (the factorised Jacobian of an earlier point) is kept if it cuts |g|_2 this much
@@ -34,68 +37,6 @@ def roundoff_floor(J, w):
         return 0.0
     terms = abs(J) @ np.abs(w)
     return float(ROUNDOFF_FACTOR * np.finfo(float).eps * np.max(terms))
-#: COLAMD's column order is used when its LU fill is below this fraction of the natural order's
-COLAMD_FILL = 0.5
-
-
-class OrderedLU:
-    """SuperLU factors of ``J[:, order]`` (natural order on the reordered columns; ``order`` None:
-    J's own), solving in J's coordinates: ``solve(b)`` gives ``x`` with ``J x = b`` (``b``: (n,)
-    or (n, k)), ``trans="T"`` with ``J^T x = b``."""
-
-    def __init__(self, J, order=None):
-        self.order = order
-        self.factors = spla.splu(J if order is None else J[:, order].tocsc(), permc_spec="NATURAL")
-
-    def solve(self, b, trans="N"):
-        if self.order is None:
-            return self.factors.solve(b, trans=trans)
-        if trans == "T":                     # (J Q)^T y = Q^T b: the rows of b in the new order
-            return self.factors.solve(np.ascontiguousarray(b[self.order]), trans="T")
-        permuted = self.factors.solve(b)
-        x = np.empty_like(permuted)
-        x[self.order] = permuted
-        return x
-
-    @property
-    def fill(self):
-        """Nonzeros of the factors L and U."""
-        return self.factors.L.nnz + self.factors.U.nnz
-
-
-def column_order(J, banded=None):
-    """The column order :class:`OrderedLU` uses for Jacobians with ``J``'s pattern: ``banded``
-    (the NLP's block-banded order, :meth:`CollocationNLP.banded_columns`; None: J's own) or
-    COLAMD's permutation when that roughly halves the fill (:data:`COLAMD_FILL`; a tree of
-    modules, whose branches the banded order puts one after the other)."""
-    first = OrderedLU(J, banded)
-    colamd = spla.splu(J, permc_spec="COLAMD")
-    if colamd.L.nnz + colamd.U.nnz >= COLAMD_FILL * first.fill:
-        return banded
-    order = np.empty_like(colamd.perm_c)
-    order[colamd.perm_c] = np.arange(colamd.perm_c.size)
-    return order
-
-
-class BufferedFunction:
-    """A CasADi Function evaluated into preallocated numpy arrays (CasADi's buffer API)."""
-
-    def __init__(self, function):
-        self.inputs = [np.zeros(function.nnz_in(i)) for i in range(function.n_in())]
-        self.outputs = [np.zeros(function.nnz_out(i)) for i in range(function.n_out())]
-        self._buffer, self._evaluate = function.buffer()
-        for index, array in enumerate(self.inputs):
-            self._buffer.set_arg(index, memoryview(array))
-        for index, array in enumerate(self.outputs):
-            self._buffer.set_res(index, memoryview(array))
-
-    def __call__(self, *values):
-        for array, value in zip(self.inputs, values):
-            array[:] = value
-        self._evaluate()
-        return self.outputs
-
-
 class SquareSystem:
     """``g`` and ``J_w = dg/dw`` at ``(w, P)`` for the NLP ``nlp``, from the Functions
     ``residual (w, P) -> g`` and ``jacobian (w, P) -> (g, J_w)``; ``compiled_residual``: the
@@ -127,7 +68,6 @@ class SquareSystem:
         """:class:`OrderedLU` of a Jacobian ``J`` (CSC) of this system, in the column order chosen
         (:func:`column_order`) at the first one."""
         from ..resources import memory_guard
-        from .collocation import MEMORY_ADVICE
         with memory_guard(f"factorising the Jacobian of {J.shape[0]} unknowns ({J.nnz} nonzeros)", MEMORY_ADVICE):
             if self._order is None:
                 banded = self.nlp.banded_columns() if hasattr(self.nlp, "banded_columns") else None
@@ -265,23 +205,3 @@ def _parameter_jacobian(nlp, residual):
     g = residual(w, P)
     function = ca.Function("parameter_jacobian", [w, P], [g, ca.jacobian(g, P)])
     return BufferedFunction(function), CscPattern(function.sparsity_out(1))
-
-
-class CscPattern:
-    """A CasADi sparsity pattern, to wrap a buffer of nonzeros as a scipy CSC matrix."""
-
-    def __init__(self, sparsity):
-        if sparsity is not None:
-            colind, row = sparsity.get_ccs()
-            self.indptr, self.indices = np.array(colind), np.array(row)
-            self.shape = (sparsity.size1(), sparsity.size2())
-
-    @classmethod
-    def of(cls, indptr, indices, shape):
-        """The pattern of CSC arrays."""
-        pattern = cls(None)
-        pattern.indptr, pattern.indices, pattern.shape = np.asarray(indptr), np.asarray(indices), tuple(shape)
-        return pattern
-
-    def matrix(self, values):
-        return sp.csc_matrix((values.copy(), self.indices, self.indptr), shape=self.shape)

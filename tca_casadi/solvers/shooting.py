@@ -37,7 +37,7 @@ from ..model.loads import distributed_fields, is_active
 from ..model.rod import STATE_SIZE, explicit_strain_rate, rod_equations
 from ..model.routes import route_expressions
 from .assemble import build_solution
-from .newton import BufferedFunction
+from ..buffers import BufferedFunction
 
 log = logging.getLogger(__name__)
 

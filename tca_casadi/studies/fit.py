@@ -21,7 +21,7 @@ system, one sparse LU per experiment).
 p parameters) and ``s^2 = 2 cost / (n - p)``: ``Cov = s^2 (J^T J)^-1`` (``absolute_sigma``: the
 sigmas are trusted, ``s = 1``), standard errors its diagonal's roots, 95 % intervals
 ``theta +- t_{0.975, n-p} SE``, correlations ``Cov_ij / (SE_i SE_j)``. ``J^T J`` is the Fisher
-information; when its condition number exceeds :data:`CONDITION_LIMIT` the parameters with a
+information; when its condition number exceeds :data:`~tca_casadi.studies.fit_result.CONDITION_LIMIT` the parameters with a
 large share in its weakest direction cannot be told apart from the data: they are named, and
 the parameters in an exactly singular direction get no interval at all.
 """
@@ -39,14 +39,6 @@ from .parameters import resolve_parameter, shown_as_given
 
 #: default standard deviations of the measurements, per kind [m, N]
 DEFAULT_SIGMAS = {"length": 1e-4, "force": 1e-3}
-#: Fisher information condition numbers above this are reported (parameters not told apart)
-CONDITION_LIMIT = 1e10
-#: a direction whose singular value is below this fraction of the largest is unidentifiable
-SINGULAR = 1e-9
-#: a parameter whose share of the weakest direction is at least this is named in the warning
-SHARE = 0.3
-#: a parameter with at least this share of a singular direction has no finite variance
-NULL_SHARE = 0.01
 
 
 @dataclass
@@ -377,7 +369,7 @@ class FitModel:
         self.nominal = self.sim.solve(warn=False)            # fixes the mesh (accuracy control), as solve does
         self.solver = self.sim.solver()
         self.data, self.parameters = data, parameters
-        from ..solvers.newton import BufferedFunction, CscPattern
+        from ..buffers import BufferedFunction, CscPattern
         function = measurement_function(self.solver.nlp, data.names)
         self.measure = BufferedFunction(function)
         self.patterns = (CscPattern(function.sparsity_out(1)), CscPattern(function.sparsity_out(2)))

@@ -9,7 +9,15 @@ import numpy as np
 from ..output import atomic_path, write_json
 from ..results import ResultAPI, status_of
 from ..status import Status
-from .fit import CONDITION_LIMIT, NULL_SHARE, SHARE, SINGULAR
+
+#: Fisher information condition numbers above this are reported (parameters not told apart)
+CONDITION_LIMIT = 1e10
+#: a direction whose singular value is below this fraction of the largest is unidentifiable
+SINGULAR = 1e-9
+#: a parameter whose share of the weakest direction is at least this is named in the warning
+SHARE = 0.3
+#: a parameter with at least this share of a singular direction has no finite variance
+NULL_SHARE = 0.01
 
 
 @dataclass

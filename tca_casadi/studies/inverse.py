@@ -33,7 +33,7 @@ from ..errors import ScenarioError
 from ..model.rotations import ROTATION, rotation_angle, rotation_numpy
 from ..scenario.checks import closest
 from ..solvers.continuation import BranchFollower
-from ..solvers.newton import BufferedFunction, CscPattern
+from ..buffers import BufferedFunction, CscPattern
 from ..status import SolveStatus, Status
 from .inverse_result import InverseResult, write_path_results  # noqa: F401  (re-exported)
 from .parameters import resolve_parameters, shown_as_given

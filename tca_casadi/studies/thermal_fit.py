@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import ScenarioError
 from ..units import ureg
-from .fit import _split_unit as _split
+from ..tables import name_of, unit_of
 
 #: relative step of the central differences
 STEP = 1e-5
@@ -62,7 +62,7 @@ def read_heating_curve(path, robot, sigma=None):
     keys = [a.key for a in robot.thermal_actuators]
     time_column, measured, sigmas = None, [], {}
     for column, text in enumerate(header):
-        name, unit = _split(text)
+        name, unit = name_of(text), unit_of(text)
         if name == "t":
             time_column = (column, unit or "s")
         elif name.startswith("sigma_"):

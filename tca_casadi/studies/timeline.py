@@ -96,6 +96,14 @@ class _TemperatureDrive:
         self.value = value
 
 
+def mpc_drives(scenario):
+    """``[(MODULE.TCA, drive)]`` of the scenario's ``kind: mpc`` drives (run by
+    :class:`tca_casadi.control.ClosedLoop`, not by the open-loop timeline)."""
+    return [(f"{module.name}.{actuator.name}", actuator.drive) for module in scenario.modules
+            for actuator in module.actuators
+            if getattr(actuator, "drive", None) is not None and actuator.drive.kind == "mpc"]
+
+
 class TimeSimulation:
     """A :class:`~tca_casadi.simulation.Simulation`'s timeline, ready to run.
 
@@ -112,7 +120,6 @@ class TimeSimulation:
     def __init__(self, sim, duration=None, dt=0.1):
         self.sim = sim
         scenario = sim.scenario
-        from ..control.mpc import mpc_drives
         if mpc_drives(scenario):
             raise ScenarioError(f"{', '.join(k for k, _ in mpc_drives(scenario))}: an mpc drive runs in the closed loop "
                                 "(tca_casadi.control.ClosedLoop; tca-casadi simulate runs it)")

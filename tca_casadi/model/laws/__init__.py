@@ -27,3 +27,6 @@ def muscle_module(kind):
 def thermal_kinds():
     """Actuator kinds heated by a drive in ``simulate``: ``tca`` and the ``THERMAL`` muscles."""
     return ("tca",) + tuple(kind for kind, law in muscles().items() if law.THERMAL)
+
+
+__all__ = ["muscles", "muscle_module", "thermal_kinds"]
