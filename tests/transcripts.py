@@ -7,6 +7,11 @@ import shlex
 import subprocess
 import sys
 
+#: commands not run by the documentation tests, by what they start with or contain: the test
+#: command itself, installs, benchmarks and the arm's ``--check`` sequence (CI and ``scripts/``)
+SKIPPED = ("pip install", "python3 -m venv", "python -m pytest", "python scripts/bench.py",
+           "bash .ci/run", "--check", "mkdocs build")
+
 
 def fenced_blocks(text):
     """``[(language, text)]`` of every fenced block, in order."""
@@ -62,3 +67,21 @@ def run_transcript(workdir, command, expected):
     assert result.returncode in (0, 1), result.stderr
     for line in expected:
         assert any(matches(line, got) for got in output), f"{line!r} not in:\n" + "\n".join(output)
+
+
+def skipped(command):
+    """Whether the documentation tests leave ``command`` to CI or ``scripts/``."""
+    return any(part in command for part in SKIPPED)
+
+
+def run_shell_block(workdir, block):
+    """Run every line of a ``bash`` block in ``workdir`` (``tca-casadi`` and ``python`` as this
+    interpreter's), each exiting 0, skipping :data:`SKIPPED` lines."""
+    for command in [c for c in block.strip().splitlines() if c and not c.startswith("#")]:
+        if skipped(command):
+            continue
+        if command.startswith("python "):
+            command = sys.executable + command[len("python"):]
+        result = subprocess.run(command.replace("tca-casadi ", f"{sys.executable} -m tca_casadi.cli "),
+                                shell=True, cwd=workdir, capture_output=True, text=True, timeout=900)
+        assert result.returncode == 0, f"{command}\n{result.stdout[-2000:]}\n{result.stderr[-2000:]}"

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from transcripts import fenced_blocks, run_transcript, transcripts
+from transcripts import fenced_blocks, run_shell_block, run_transcript, skipped, transcripts
 
 ROOT = Path(__file__).resolve().parents[2]
 TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("*.md"))
@@ -58,12 +58,14 @@ def test_the_scenario_reference_names_every_key_with_its_unit():
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
     directory = tmp_path_factory.mktemp("tutorials")
-    for name in ("scenarios", "data"):
+    for name in ("scenarios", "data", "scripts"):
         shutil.copytree(ROOT / name, directory / name)
     return directory
 
 
-STEPS = [(page.name, command, expected) for page in TUTORIALS for command, expected in transcripts(page.read_text())]
+STEPS = [(page.name, command, expected) for page in TUTORIALS for command, expected in transcripts(page.read_text())
+         if not skipped(command)]
+SHELL = [(page.name, text) for page in TUTORIALS for kind, text in fenced_blocks(page.read_text()) if kind == "bash"]
 PYTHON = [(page.name, k, text) for page in TUTORIALS
           for k, text in enumerate(t for kind, t in fenced_blocks(page.read_text()) if kind == "python")]
 
@@ -71,6 +73,11 @@ PYTHON = [(page.name, k, text) for page in TUTORIALS
 @pytest.mark.parametrize("page, command, expected", STEPS, ids=[f"{p}: {c[:70]}" for p, c, _ in STEPS])
 def test_tutorial_commands_run(workdir, page, command, expected):
     run_transcript(workdir, command, expected)
+
+
+@pytest.mark.parametrize("page, block", SHELL, ids=[f"{p}: {b.strip().splitlines()[0][:60]}" for p, b in SHELL])
+def test_tutorial_shell_blocks_run(workdir, page, block):
+    run_shell_block(workdir, block)
 
 
 @pytest.mark.parametrize("page, index, code", PYTHON, ids=[f"{p} python {k}" for p, k, _ in PYTHON])

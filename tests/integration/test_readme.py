@@ -4,26 +4,19 @@ match exactly, the command-line synopsis matches ``--help``, and every dotted pa
 example names something in a shipped scenario.
 
 Long runs (the test command itself, installs, benchmarks, the arm's ``--check`` sequence) are
-listed in ``SKIPPED`` and run elsewhere (CI, ``scripts/``)."""
+listed in ``transcripts.SKIPPED`` and run elsewhere (CI, ``scripts/``)."""
 import re
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from tca_casadi import cli
 
-from transcripts import fenced_blocks, run_transcript, transcripts
+from transcripts import fenced_blocks, run_shell_block, run_transcript, skipped, transcripts
 
 ROOT = Path(__file__).resolve().parents[2]
 README = (ROOT / "README.md").read_text()
-
-#: commands not run here, by what they start with or contain
-SKIPPED = ("pip install", "python3 -m venv", "python -m pytest", "python scripts/bench.py",
-           "bash .ci/run", "--check")
-
 
 def _all_blocks():
     """``[(language, text)]`` of every fenced block, in order."""
@@ -39,10 +32,6 @@ def _transcripts():
     return transcripts(README)
 
 
-def _skipped(command):
-    return any(part in command for part in SKIPPED)
-
-
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
     """A copy of the repository's scenarios and scripts, as a fresh clone has them."""
@@ -52,7 +41,7 @@ def workdir(tmp_path_factory):
     return directory
 
 
-@pytest.mark.parametrize("command, expected", [t for t in _transcripts() if not _skipped(t[0])],
+@pytest.mark.parametrize("command, expected", [t for t in _transcripts() if not skipped(t[0])],
                          ids=lambda value: value if isinstance(value, str) else "")
 def test_transcript(workdir, command, expected):
     run_transcript(workdir, command, expected)
@@ -61,14 +50,7 @@ def test_transcript(workdir, command, expected):
 @pytest.mark.parametrize("block", [b for b in _blocks("bash")],
                          ids=lambda b: b.strip().splitlines()[0][:60])
 def test_shell_block(workdir, block):
-    for command in [c for c in block.strip().splitlines() if c and not c.startswith("#")]:
-        if _skipped(command):
-            continue
-        if command.startswith("python "):
-            command = sys.executable + command[len("python"):]
-        result = subprocess.run(command.replace("tca-casadi ", f"{sys.executable} -m tca_casadi.cli "),
-                                shell=True, cwd=workdir, capture_output=True, text=True, timeout=900)
-        assert result.returncode == 0, f"{command}\n{result.stdout[-2000:]}\n{result.stderr[-2000:]}"
+    run_shell_block(workdir, block)
 
 
 @pytest.mark.parametrize("index", range(len(_blocks("python"))))
@@ -107,7 +89,8 @@ def test_dotted_paths_in_examples_exist():
         names |= {m.name for m in scenario.modules} | {load.name for load in scenario.loads}
         names |= {o.name for o in scenario.objects}
     names |= {"name", "gravity", "base", "solver", "materials", "tca_types"}
-    used = re.findall(r"--(?:set|param) \"?([A-Za-z_][\w]*)\.", README)
+    pages = [README] + [page.read_text() for page in (ROOT / "docs").rglob("*.md")]
+    used = re.findall(r"--(?:set|param) \"?([A-Za-z_][\w]*)\.", "\n".join(pages))
     assert used and set(used) <= names, set(used) - names
 
 
@@ -141,7 +124,7 @@ def _rendered_tables(path):
     return stray, uneven
 
 
-@pytest.mark.parametrize("name", ["README.md", "docs/control.md", "docs/contact.md"])
+@pytest.mark.parametrize("name", ["README.md"] + sorted(str(p.relative_to(ROOT)) for p in (ROOT / "docs").rglob("*.md")))
 def test_markdown_tables_render(name):
     """Every table renders as a table (its separator has as many cells as its header: else
     markdown shows the lines as text) and no row has more or fewer cells than its header."""
