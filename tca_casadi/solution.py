@@ -113,7 +113,8 @@ class ContactResult:
 
     @property
     def friction_margin(self):
-        return float(self.friction * self.normal_force - np.linalg.norm(self.tangential_force))
+        from .model.friction import cone_margin
+        return cone_margin(self.friction, self.normal_force, self.tangential_force)
 
     @property
     def needed_friction(self):

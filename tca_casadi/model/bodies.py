@@ -59,7 +59,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .arith import cross, is_casadi, sqrt, tanh
+from .arith import cross, is_casadi, tanh
+from .friction import cone_margin
 from .obstacles import Box
 
 # (casadi, and the modules that import it, are imported where used: ``validate`` declares the
@@ -174,7 +175,7 @@ def friction_equations(moved, n, sticks, normal_force, tangential, slip, gap, fo
         (1 - c) * along / force_scale + normal_part
     if not sliding:
         return ca.vertcat(tangent, slip)
-    margin = friction * normal_force - sqrt(ca.dot(along, along) + (CONE_SMOOTHING * force_scale) ** 2)
+    margin = cone_margin(friction, normal_force, along, CONE_SMOOTHING * force_scale)
     return ca.vertcat(tangent, c * normal_contact(slip * force_scale, margin, force_scale, force_scale) + (1 - c) * slip)
 
 

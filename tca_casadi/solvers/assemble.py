@@ -8,6 +8,7 @@ from ..errors import PhysicsWarning
 from ..model.balance import global_balance, load_markers
 from ..model.compatibility import slack_length
 from ..model.contact import CLOSED, contact_geometry, gaps, outline_of, outline_size
+from ..model.friction import cone_margin
 from ..model.rotations import rotations_of
 from ..text import unit_text
 from ..solution import ActuatorResult, ContactResult, ModuleResult, Solution
@@ -193,7 +194,7 @@ def _support_corners(robot, body, r, R, unknowns, param):
     rows = np.asarray(unknowns, float).reshape(-1, CONTACT_UNKNOWNS)
     gaps, n = support_gaps(plane, body, r, R)
     gaps, n = np.array([float(g) for g in gaps]), np.asarray(n, float).ravel()
-    margins = body.support_friction * rows[:, 0] - np.linalg.norm(rows[:, 1:4], axis=1)
+    margins = cone_margin(body.support_friction, rows[:, 0], rows[:, 1:4])
     sliding = np.array([body.sliding and body.support_friction > 0 and slides(lam, margin, fo)
                         for lam, margin in zip(rows[:, 4], margins)], bool)
     pattern = [bool(f / fo > g / lo) for f, g in zip(rows[:, 0], gaps)]
@@ -251,7 +252,7 @@ def _closed_contact(module, s, kind, name, point, n, g, force, tangential, multi
     from ..model.bodies import slides
     fs = module.force_scale
     pattern.append(force / fs > g / outline_size(module))
-    margin = friction * force - float(np.linalg.norm(tangential))
+    margin = cone_margin(friction, force, tangential)
     sliding = coulomb and friction > 0 and slides(multiplier, margin, fs)
     if coulomb:
         pattern.append(sliding)
