@@ -104,7 +104,7 @@ def test_pick_and_place_command_checks_every_step_and_moves_the_object(tmp_path,
     assert opening[0] > opening[1] + 5e-3 and opening[3] > opening[2] + 5e-3   # heated opens, cooled closes
     assert [int(r["cube.held"]) for r in rows] == [0, 1, 1, 0]
     assert float(rows[3]["cube.x [m]"]) == pytest.approx(0.008, abs=1e-4)      # put down 8 mm away
-    assert float(rows[3]["cube.z [m]"]) == pytest.approx(scenario["objects"][0]["position"][2])
+    assert float(rows[3]["cube.z [m]"]) == pytest.approx(scenario["objects"][0]["position"][2], rel=1e-9)
     for row in rows:
         assert float(row["shooting_centerline_difference [m]"]) < 1e-7
     import json

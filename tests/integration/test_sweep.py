@@ -68,9 +68,9 @@ def test_sweep_of_a_force_component_and_gravity_magnitude():
     direct = Simulation.from_file(SCENARIOS / "bending_module.yaml").solve()
     assert result.completed
     assert np.max(np.abs(result.tip_positions[-1] - direct.tip_position)) < 1e-9
-    assert result.points[0].values[0] == 0.0 and result.points[-1].values[0] == pytest.approx(9.81)
+    assert result.points[0].values[0] == 0.0 and result.points[-1].values[0] == pytest.approx(9.81, rel=1e-12)
     forced = Sweep(sim, "tip_force.force.x", 0, "2 mN", steps=3).run()
-    assert forced.values[-1, 0] == pytest.approx(2e-3)
+    assert forced.values[-1, 0] == pytest.approx(2e-3, rel=1e-12)
     assert forced.tip_positions[-1][0] > forced.tip_positions[0][0]     # pushed towards +x
 
 

@@ -13,9 +13,9 @@ def load(scenarios, *overrides):
 def test_shipped_scenario_loads_in_si(scenarios):
     scenario = load(scenarios)
     module = scenario.modules[0]
-    assert module.length == pytest.approx(0.045)
-    assert module.actuators[1].route.angle == pytest.approx(2.0943951023931953)
-    assert scenario.materials["ecoflex30"].shear() == pytest.approx(0.125e6 / 3)
+    assert module.length == pytest.approx(0.045, rel=1e-15)
+    assert module.actuators[1].route.angle == pytest.approx(2.0943951023931953, rel=1e-15)
+    assert scenario.materials["ecoflex30"].shear() == pytest.approx(0.125e6 / 3, rel=1e-15)
     assert scenario.base.orientation.as_quaternion() == pytest.approx((0, 1, 0, 0), abs=1e-15)
 
 
