@@ -12,7 +12,8 @@ import pytest
 from transcripts import fenced_blocks, run_shell_block, run_transcript, skipped, transcripts
 
 ROOT = Path(__file__).resolve().parents[2]
-TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("*.md"))
+#: the pages whose examples run: every page of the site (getting-started's install lines are skipped)
+TUTORIALS = sorted((ROOT / "docs").rglob("*.md"))
 
 
 def test_the_site_builds_with_warnings_as_errors(tmp_path):
@@ -84,6 +85,7 @@ def test_tutorial_shell_blocks_run(workdir, page, block):
 def test_tutorial_python_runs(workdir, page, index, code, monkeypatch):
     import matplotlib
     matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
     monkeypatch.chdir(workdir)
     exec(compile(code, f"{page} python block {index}", "exec"), {"__name__": "tutorial"})
-    matplotlib.pyplot.close("all")
+    plt.close("all")
