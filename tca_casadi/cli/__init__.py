@@ -7,11 +7,11 @@ when some samples did not converge (they are rows with their reason); ``fit``: 1
 squares did not converge.
 
 One module per stage of the command line: :mod:`.parser` (every command's options),
-:mod:`.main` (running one), :mod:`.common` (what they share), and the commands by what they
+:mod:`.run` (running one), :mod:`.common` (what they share), and the commands by what they
 compute: :mod:`.statics` (validate, solve, check, sweep, inverse), :mod:`.sequence`,
 :mod:`.time` (simulate), :mod:`.plan`, :mod:`.study`, :mod:`.fit`.
 """
-from .main import main
+from .run import main
 from .parser import build_parser
 
 __all__ = ["build_parser", "main"]

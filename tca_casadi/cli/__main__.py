@@ -1,6 +1,6 @@
 """``python -m tca_casadi.cli``: the ``tca-casadi`` program."""
 import sys
 
-from .main import main
+from .run import main
 
 sys.exit(main())

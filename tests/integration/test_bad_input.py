@@ -400,3 +400,25 @@ def test_a_factorisation_that_runs_out_of_memory_says_its_size(capsys, bending, 
     line = one_error_line(err)
     assert code == 1 and "out of memory while factorising the Jacobian of 411 unknowns" in line, line
     assert not (tmp_path / "out").exists()
+
+
+def test_a_ctrl_c_inside_a_c_extension_callback_is_an_interrupt(capsys, monkeypatch):
+    """A Ctrl-C that lands while numpy converts a CasADi matrix comes back as a SystemError
+    caused by the KeyboardInterrupt (seen in CI): one line, status 130, like any interrupt; any
+    other SystemError is not ours to hide."""
+    import tca_casadi.cli.run as run
+
+    def interrupted(args):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise SystemError("<function DM.__array__> returned a result with an exception set") from exc
+
+    def broken(args):
+        raise SystemError("something else")
+    monkeypatch.setitem(run.COMMANDS, "validate", interrupted)
+    assert run.main(["validate", "x.yaml"]) == 130
+    assert capsys.readouterr().err.startswith("interrupted: no result of this run was written")
+    monkeypatch.setitem(run.COMMANDS, "validate", broken)
+    with pytest.raises(SystemError, match="something else"):
+        run.main(["validate", "x.yaml"])

@@ -44,13 +44,25 @@ def main(argv=None):
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except KeyboardInterrupt:
-        if argv is None:                 # a second Ctrl-C must not break the one-line report
-            signal.signal(signal.SIGINT, signal.SIG_IGN)
-        print("interrupted: no result of this run was written (the output directory keeps what it held; "
-              "a study goes on from its solved rows with --resume)", file=sys.stderr)
-        if argv is None:
-            _exit_interrupted()
-        return 130
+        return _interrupted(argv)
+    except SystemError as exc:
+        # a Ctrl-C that lands inside a C extension's callback (numpy converting a CasADi
+        # matrix) comes back as a SystemError caused by the KeyboardInterrupt
+        if not isinstance(exc.__cause__ or exc.__context__, KeyboardInterrupt):
+            raise
+        return _interrupted(argv)
+
+
+def _interrupted(argv):
+    """The one-line report of an interrupt; status 130 (the process ends at once when run as
+    the program)."""
+    if argv is None:                     # a second Ctrl-C must not break the one-line report
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    print("interrupted: no result of this run was written (the output directory keeps what it held; "
+          "a study goes on from its solved rows with --resume)", file=sys.stderr)
+    if argv is None:
+        _exit_interrupted()
+    return 130
 
 
 def _take_interrupts():
