@@ -4,6 +4,7 @@ stands for what varies between runs; an ``error:`` line must be the whole output
 by the README's test and the documentation site's tutorials."""
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 
@@ -85,3 +86,11 @@ def run_shell_block(workdir, block):
         result = subprocess.run(command.replace("tca-casadi ", f"{sys.executable} -m tca_casadi.cli "),
                                 shell=True, cwd=workdir, capture_output=True, text=True, timeout=900)
         assert result.returncode == 0, f"{command}\n{result.stdout[-2000:]}\n{result.stderr[-2000:]}"
+
+
+def fresh_copy(directory, root):
+    """``directory`` holding copies of ``root``'s scenarios, scripts and data, as a fresh clone
+    has them (where documented commands run); returns it."""
+    for name in ("scenarios", "scripts", "data"):
+        shutil.copytree(root / name, directory / name)
+    return directory

@@ -1,7 +1,6 @@
 """The documentation site (issue 37): it builds with warnings as errors, its scenario reference
 (generated from the schema) names every key of every section with its unit, and every
 tutorial's commands and Python run and print what the page shows."""
-import shutil
 import subprocess
 import sys
 import typing
@@ -9,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from transcripts import fenced_blocks, run_shell_block, run_transcript, skipped, transcripts
+from transcripts import fenced_blocks, fresh_copy, run_shell_block, run_transcript, skipped, transcripts
 
 ROOT = Path(__file__).resolve().parents[2]
 #: the pages whose examples run: every page of the site (getting-started's install lines are skipped)
@@ -58,10 +57,7 @@ def test_the_scenario_reference_names_every_key_with_its_unit():
 
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
-    directory = tmp_path_factory.mktemp("tutorials")
-    for name in ("scenarios", "data", "scripts"):
-        shutil.copytree(ROOT / name, directory / name)
-    return directory
+    return fresh_copy(tmp_path_factory.mktemp("tutorials"), ROOT)
 
 
 STEPS = [(page.name, command, expected) for page in TUTORIALS for command, expected in transcripts(page.read_text())

@@ -6,14 +6,13 @@ example names something in a shipped scenario.
 Long runs (the test command itself, installs, benchmarks, the arm's ``--check`` sequence) are
 listed in ``transcripts.SKIPPED`` and run elsewhere (CI, ``scripts/``)."""
 import re
-import shutil
 from pathlib import Path
 
 import pytest
 
 from tca_casadi import cli
 
-from transcripts import fenced_blocks, run_shell_block, run_transcript, skipped, transcripts
+from transcripts import fenced_blocks, fresh_copy, run_shell_block, run_transcript, skipped, transcripts
 
 ROOT = Path(__file__).resolve().parents[2]
 README = (ROOT / "README.md").read_text()
@@ -35,10 +34,7 @@ def _transcripts():
 @pytest.fixture(scope="module")
 def workdir(tmp_path_factory):
     """A copy of the repository's scenarios and scripts, as a fresh clone has them."""
-    directory = tmp_path_factory.mktemp("readme")
-    for name in ("scenarios", "scripts", "data"):
-        shutil.copytree(ROOT / name, directory / name)
-    return directory
+    return fresh_copy(tmp_path_factory.mktemp("readme"), ROOT)
 
 
 @pytest.mark.parametrize("command, expected", [t for t in _transcripts() if not skipped(t[0])],
