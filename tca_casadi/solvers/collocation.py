@@ -168,11 +168,13 @@ class CollocationSolver:
     def square(self):
         """The :class:`SquareSystem` (residual, sparse Jacobian, Newton) of this NLP."""
         if self._square is None:
-            fast = None
-            if self.compiles:
-                from .compiled import compiled
-                fast = compiled(self._constraints)
-            self._square = SquareSystem(self.nlp, self._constraints, self._jacobian, compiled_residual=fast)
+            native = None
+            if self.compiles:                    # the residual and the chord steps compiled (one library)
+                from .native import NativeChord
+                native = NativeChord(self._constraints)
+            self._square = SquareSystem(self.nlp, self._constraints, self._jacobian,
+                                        compiled_residual=native and native.residual)
+            self._square.native = native
         return self._square
 
     def linearise(self, w, params):

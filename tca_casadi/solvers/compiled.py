@@ -37,23 +37,39 @@ def compiler():
     raise TcaError("solver.jit: true needs a C compiler (gcc or cc on the PATH, or $CC); set solver.jit: false")
 
 
-def compiled(function, directory=None):
+def compiled(function, directory=None, sources=(), defines=()):
     """``function`` (a CasADi Function) as compiled code: an external Function with the same
-    inputs and outputs, loaded from the cache (compiled there first if missing)."""
-    directory = Path(directory or cache_directory())
-    key = hashlib.sha256(function.serialize().encode()).hexdigest()[:20]
-    library = directory / f"{function.name()}_{key}.so"
+    inputs and outputs, loaded from the cache (compiled there first if missing). ``sources``:
+    paths of further C files compiled into the same library (e.g. :mod:`.native`'s chord
+    steps), with the preprocessor ``defines`` (``"NAME=VALUE"``); :func:`library_of` gives the
+    library's path."""
+    library = library_of(function, directory, sources, defines)
     if not library.exists():
-        directory.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryDirectory(dir=directory) as work:
+        library.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(dir=library.parent) as work:
             source = Path(work) / f"{function.name()}.c"
             generator = ca.CodeGenerator(source.name, {"with_header": False})
             generator.add(function)
             generator.generate(f"{work}{os.sep}")
             built = Path(work) / library.name
-            result = subprocess.run([compiler(), *FLAGS, "-o", str(built), str(source), "-lm"],
-                                    capture_output=True, text=True)
+            # -Bsymbolic: the sources call this library's residual, never a same-named one loaded before
+            linking = ("-Wl,-Bsymbolic",) if sources else ()
+            command = [compiler(), *FLAGS, *linking, *(f"-D{d}" for d in defines), "-o", str(built), str(source),
+                       *(str(s) for s in sources), "-lm"]
+            result = subprocess.run(command, capture_output=True, text=True)
             if result.returncode != 0:
                 raise TcaError(f"solver.jit: compiling {function.name()} failed: {result.stderr.strip()[:300]}")
             os.replace(built, library)           # atomic: a concurrent process sees all or nothing
     return ca.external(function.name(), str(library))
+
+
+def library_of(function, directory=None, sources=(), defines=()):
+    """The cached library's path of :func:`compiled`'s arguments: named by a hash of the
+    Function's serialized form, the extra sources' text and the defines."""
+    directory = Path(directory or cache_directory())
+    digest = hashlib.sha256(function.serialize().encode())
+    for path in sources:
+        digest.update(Path(path).read_bytes())
+    for define in defines:
+        digest.update(define.encode())
+    return directory / f"{function.name()}_{digest.hexdigest()[:20]}.so"

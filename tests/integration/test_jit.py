@@ -65,3 +65,31 @@ def test_auto_compiles_only_a_long_dynamic_run_and_only_with_a_compiler(tmp_path
     monkeypatch.delenv("CC", raising=False)
     _, compiled_without = run(3)
     assert not compiled_without
+
+
+def test_compiled_chord_steps_give_the_same_motion(tmp_path, monkeypatch):
+    """``solver.jit: true`` runs the chord steps in C (:mod:`tca_casadi.solvers.native`), kept
+    while they cut the residual threefold instead of tenfold: a different sequence of iterates
+    to the same tolerance, so 100 steps of the steel cantilever's free vibration agree with the
+    uncompiled run to 1e-10 m (the tip moves about 60 mm), with fewer fresh Jacobians."""
+    from tca_casadi.studies.timeline import TimeSimulation
+    from tca_casadi.solvers.newton import SquareSystem
+    monkeypatch.setenv("TCA_CASADI_CACHE", str(tmp_path))
+    cantilever = SCENARIOS / "analytic" / "steel_cantilever.yaml"
+    counted = SquareSystem.factorise
+
+    def run(jit):
+        calls = []
+
+        def factorise(self, J):
+            calls.append(1)
+            return counted(self, J)
+        monkeypatch.setattr(SquareSystem, "factorise", factorise)
+        series = TimeSimulation(Simulation.from_file(cantilever, ["duration=0.2", f"solver.jit={jit}"]), dt=0.002).run()
+        assert series.completed, series.message
+        return series.tip_positions(), len(calls)
+
+    (plain, plain_factorisations), (fast, fast_factorisations) = run("false"), run("true")
+    assert np.ptp(plain[:, 0]) > 0.03
+    assert_allclose(fast, plain, rtol=0, atol=1e-10)
+    assert fast_factorisations < plain_factorisations
