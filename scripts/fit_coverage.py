@@ -6,7 +6,7 @@ Each repetition makes 10 experiments of the bending module (random temperatures 
 TCAs) at known values of its modulus and fibre radius with 0.05 mm of Gaussian noise on the tip
 (seed = the repetition), fits both parameters with the sigmas trusted, and counts the intervals
 that hold the truth. Honest intervals hold it about 95 % of the time; the residuals' RMS is the
-noise. ``--quick``: 10 repetitions (what the test runs is ``coverage(sim, 20)``).
+noise. ``--quick``: 10 repetitions (what the test runs is ``coverage(sim, 8)``).
 """
 import argparse
 import sys
