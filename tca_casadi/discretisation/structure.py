@@ -87,6 +87,12 @@ class StructuredJacobian:
         self.indptr, self.indices, self.shape = self.plan.indptr, self.plan.indices, self.plan.shape
         self._buffers = None
 
+    def compile(self, compiler):
+        """Evaluate through ``compiler(function)`` (e.g. :func:`~tca_casadi.solvers.compiled.compiled`)
+        from now on: the same outputs, as machine code."""
+        self.function = compiler(self.function)
+        self._buffers = None
+
     def __call__(self, w, P):
         from ..buffers import BufferedFunction
         if self._buffers is None:

@@ -630,9 +630,10 @@ class SolverOptions(Strict):
     refine: Annotated[Literal["auto", "off"], BeforeValidator(
         lambda v: {False: "off", True: "auto"}.get(v, v) if isinstance(v, bool) else v)] = "auto"
     max_intervals: int = Field(default=200, ge=1, le=2000)
-    #: compile the collocation residual to machine code (gcc -O1, kept on disk per structure):
-    #: Newton's residual evaluations about six times faster, after a one-time compile of seconds;
-    #: ``auto``: only for a long dynamic run (:data:`~tca_casadi.solvers.dynamics.AUTO_JIT_STEPS`
+    #: compile the collocation residual, its Jacobians and Newton's chord steps to machine code
+    #: (gcc -O1, kept on disk per structure): residual evaluations about six times faster,
+    #: Jacobians ten times, chord steps with no Python between them, after a one-time compile of
+    #: seconds; ``auto``: only for a long dynamic run (:data:`~tca_casadi.solvers.dynamics.AUTO_JIT_STEPS`
     #: steps or more) and only where a C compiler is found
     jit: Union[bool, Literal["auto"]] = "auto"
 

@@ -172,9 +172,9 @@ class CollocationSolver:
             if self.compiles:                    # the residual and the chord steps compiled (one library)
                 from .native import NativeChord
                 native = NativeChord(self._constraints)
-            self._square = SquareSystem(self.nlp, self._constraints, self._jacobian,
-                                        compiled_residual=native and native.residual)
-            self._square.native = native
+            # the Jacobians too only when asked (solver.jit: true): their compile pays over many runs
+            self._square = SquareSystem(self.nlp, self._constraints, self._jacobian, native=native,
+                                        compile_jacobians=getattr(self.options, "jit", False) is True)
         return self._square
 
     def linearise(self, w, params):

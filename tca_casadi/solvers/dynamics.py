@@ -27,6 +27,7 @@ from ..model.dynamics import (elastic_energy_density, inertia_per_length, inerti
                               point_inertia, point_mass_of)
 from ..model.rotations import rotation_numpy, rotations_of
 from .collocation import CollocationSolver
+from .compiled import has_compiler
 
 
 INTEGRATORS = ("bdf2", "midpoint", "bdf1")
@@ -133,15 +134,6 @@ class DynamicSolver(CollocationSolver):
         return out
 
 
-def _has_compiler():
-    from ..errors import TcaError
-    from .compiled import compiler
-    try:
-        return bool(compiler())
-    except TcaError:
-        return False
-
-
 @dataclass
 class StepState:
     """Node values at one instant: per module (deviation strains (6, n), velocities (6, n))
@@ -179,7 +171,7 @@ class RodDynamics:
         self.sim, self.integrator = sim, integrator
         static = sim.solver("collocation")
         self.solver = DynamicSolver(sim.robot, static.options, meshes=static.nlp.meshes, degree=static.degree)
-        self.solver.compile_when_auto = steps is not None and steps >= AUTO_JIT_STEPS and _has_compiler()
+        self.solver.compile_when_auto = steps is not None and steps >= AUTO_JIT_STEPS and has_compiler()
         self.damping = [np.zeros(6) if damping is None else damping.matrix(module)
                         for module in sim.robot.modules]
         self.states = []                     # StepState s, the last two kept

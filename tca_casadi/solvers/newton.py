@@ -44,13 +44,22 @@ def roundoff_floor(J, w):
     return float(ROUNDOFF_FACTOR * np.finfo(float).eps * np.max(terms))
 class SquareSystem:
     """``g`` and ``J_w = dg/dw`` at ``(w, P)`` for the NLP ``nlp``, from the Functions
-    ``residual (w, P) -> g`` and ``jacobian (w, P) -> (g, J_w)``; ``compiled_residual``: the
-    residual as compiled code (:mod:`.compiled`), used for numeric evaluation instead."""
+    ``residual (w, P) -> g`` and ``jacobian (w, P) -> (g, J_w)``; ``native``: the residual and
+    the chord steps as compiled code (:class:`~tca_casadi.solvers.native.NativeChord`), used for
+    numeric evaluation instead; ``compile_jacobians``: the Jacobians and sensitivities compiled
+    as well (:func:`~tca_casadi.solvers.compiled.compiled`, large ones unoptimised)."""
 
-    def __init__(self, nlp, residual, jacobian, compiled_residual=None):
+    def __init__(self, nlp, residual, jacobian, native=None, compile_jacobians=False):
         self.nlp = nlp
+        self.native = native
+        self._compile_jacobians = compile_jacobians
         self._residual_function = residual
-        self._residual = BufferedFunction(compiled_residual or residual)
+        self._residual = BufferedFunction(native.residual if native is not None else residual)
+        if compile_jacobians:
+            if isinstance(jacobian, ca.Function):
+                jacobian = self._fast(jacobian)
+            else:
+                jacobian.compile(self._fast)
         if isinstance(jacobian, ca.Function):
             self._with_jacobian = BufferedFunction(jacobian)
             self._jacobian_pattern = CscPattern(jacobian.sparsity_out(1))
@@ -142,9 +151,6 @@ class SquareSystem:
                 return ended(iteration, None if floored else Status.NO_DESCENT, floored=floored)
         return ended(max_iterations, Status.MAX_ITERATIONS)
 
-    #: the chord steps in compiled code (a :class:`~tca_casadi.solvers.native.NativeChord`), or None
-    native = None
-
     def _chord_steps(self, w, g, P, lu, tolerance, max_steps):
         """Chord steps with ``lu`` from ``w`` (residual ``g``; both updated in place) while each
         cuts ``|g|_2`` by :data:`CHORD_CONTRACTION`, at most ``max_steps``, stopping at
@@ -177,10 +183,19 @@ class SquareSystem:
             w, P = ca.SX.sym("w", nlp.w.numel()), ca.SX.sym("P", nlp.P.numel())
             tip = nlp.outputs.expand()(w, P)[1][0:3, -1]
             function = ca.Function("tip_sensitivity", [w, P], [ca.jacobian(tip, w), ca.jacobian(tip, P)])
-            by_parameters = _parameter_jacobian(nlp, self._residual_function)
+            by_parameters = _parameter_jacobian(nlp, self._residual_function, self._fast)
             patterns = [by_parameters[1]] + [CscPattern(function.sparsity_out(k)) for k in range(2)]
-            self._sensitivity = (by_parameters[0], BufferedFunction(function), patterns)
+            self._sensitivity = (by_parameters[0], BufferedFunction(self._fast(function)), patterns)
         return self._sensitivity
+
+    def _fast(self, function):
+        """``function`` compiled (:mod:`.compiled`; code larger than
+        :data:`~tca_casadi.solvers.compiled.OPTIMISED_BYTES` unoptimised, which compiles in
+        seconds instead of minutes) when the Jacobians are compiled, else itself."""
+        if not self._compile_jacobians:
+            return function
+        from .compiled import OPTIMISED_BYTES, compiled
+        return compiled(function, optimised_bytes=OPTIMISED_BYTES)
 
     def _sensitivities(self, w, P):
         """``(dg/dP, dtip/dw, dtip/dP)`` as scipy sparse matrices (CSC)."""
@@ -200,8 +215,8 @@ class SquareSystem:
             w_sym, P_sym = ca.SX.sym("w", nlp.w.numel()), ca.SX.sym("P", nlp.P.numel())
             V = ca.SX.sym("V", nlp.P.numel(), k)
             g = self._residual_function(w_sym, P_sym)
-            self._directional = (k, BufferedFunction(ca.Function("residual_by_P", [w_sym, P_sym, V],
-                                                                 [ca.jtimes(g, P_sym, V)])))
+            self._directional = (k, BufferedFunction(self._fast(ca.Function("residual_by_P", [w_sym, P_sym, V],
+                                                                            [ca.jtimes(g, P_sym, V)]))))
         rates = self._directional[1](w, P, directions.ravel(order="F"))[0].reshape(-1, k, order="F")
         _, J = self.evaluate(w, P)
         lu = self.factorise(J)
@@ -218,15 +233,16 @@ class SquareSystem:
         return Linearisation(g, J_w, J_P, T_w, T_P.toarray(), factorise=self.factorise)
 
 
-def _parameter_jacobian(nlp, residual):
+def _parameter_jacobian(nlp, residual, fast):
     """``(function (w, P) -> (g, nonzeros of dg/dP), CscPattern)``: through the rod equations
     at one point where the NLP records them (:mod:`tca_casadi.discretisation.structure`), else
-    the expanded residual's symbolic Jacobian."""
+    the expanded residual's symbolic Jacobian; ``fast`` compiles a Function (or returns it)."""
     if getattr(nlp, "rod_calls", None) is not None:
         from ..discretisation.structure import StructuredJacobian
         structured = StructuredJacobian(nlp, wrt="P")
+        structured.compile(fast)
         return structured, CscPattern.of(structured.indptr, structured.indices, structured.shape)
     w, P = ca.SX.sym("w", nlp.w.numel()), ca.SX.sym("P", nlp.P.numel())
     g = residual(w, P)
     function = ca.Function("parameter_jacobian", [w, P], [g, ca.jacobian(g, P)])
-    return BufferedFunction(function), CscPattern(function.sparsity_out(1))
+    return BufferedFunction(fast(function)), CscPattern(function.sparsity_out(1))

@@ -36,6 +36,8 @@ from .study_worker import OUTPUTS, Chunk, failure_row, output_kind, solve_chunk
 
 #: samples per chunk at most
 MAX_CHUNK = 500
+#: ``solver.jit: auto`` compiles a study of at least this many samples (:attr:`Study.compiles`)
+AUTO_JIT_SAMPLES = 5000
 #: chunks per worker (load balance against one cold start per chunk)
 CHUNKS_PER_WORKER = 4
 #: the file rows stream into (deleted once the study's results are written)
@@ -206,8 +208,17 @@ class Study:
                 out.append(Chunk(key, raw, structure, meshes, degree, self.parameters,
                                  [int(i) for i in self.design.ids[part]],
                                  self.design.values[np.ix_(part, columns)].tolist(), self.outputs,
-                                 self.sim.scenario._allow_code))
+                                 self.sim.scenario._allow_code, self.compiles))
         return out
+
+    @property
+    def compiles(self):
+        """Whether the workers run compiled (``solver.jit``): always with ``true``; with ``auto``
+        for a study of :data:`AUTO_JIT_SAMPLES` samples or more where a C compiler is found (a
+        compile of seconds, kept on disk, against about 3 ms saved per sample)."""
+        from ..solvers.compiled import has_compiler
+        jit = self.sim.scenario.solver.jit
+        return jit is True or (jit == "auto" and self.design.size >= AUTO_JIT_SAMPLES and has_compiler())
 
     def _mesh(self, structure):
         """``(meshes, degree)`` of a structure: its collocation solver's after one cold,
@@ -290,7 +301,8 @@ class Study:
         from .study_result import StudyResult
         return StudyResult.from_rows(self, [rows[i] for i in sorted(rows)], {
             "ran_on": describe(kind, target), "workers": target if kind != "dask" else cluster,
-            "wall_time_s": time.perf_counter() - started, "resumed_samples": resumed}, stream)
+            "wall_time_s": time.perf_counter() - started, "resumed_samples": resumed,
+            "compiled": self.compiles}, stream)
 
     def local_sensitivities(self):
         """``d tip / d value`` [m per unit] (3, p) of the parameter paths at the scenario's own

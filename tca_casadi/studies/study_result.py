@@ -141,7 +141,8 @@ class StudyResult(ResultAPI):
         rate = info.get("samples_per_second")
         lines = [f"study of {info['scenario']}: {info['samples']} samples ({info['design']}), "
                  f"{info['converged']} converged, {info['failed']} failed, in {info['wall_time_s']:.2f} s"
-                 + (f" ({rate:.0f} samples/s)" if rate else "") + f" on {info['ran_on']}"]
+                 + (f" ({rate:.0f} samples/s)" if rate else "") + f" on {info['ran_on']}"
+                 + (", compiled (solver.jit)" if info.get("compiled") else "")]
         tips = self.tips()
         if len(tips):
             low, high = tips.min(axis=0) * 1e3, tips.max(axis=0) * 1e3

@@ -40,6 +40,8 @@ class Chunk:
     outputs: list = field(default_factory=list)
     #: the user allowed the scenario's custom laws' code (workers rebuild it from ``raw``)
     allow_code: bool = False
+    #: ``solver.jit: auto`` decided to compile (a study of :data:`AUTO_JIT_SAMPLES` or more)
+    compiled: bool = False
 
 
 def solve_chunk(chunk, progress=None):
@@ -84,6 +86,7 @@ def _prepared(chunk):
     sim = Simulation.from_file(chunk.raw, chunk.structure, allow_code=chunk.allow_code)
     if chunk.meshes is not None:
         sim.use_meshes(chunk.meshes, chunk.degree)
+        sim.solver().compile_when_auto = chunk.compiled
     _PREPARED[chunk.key] = (sim, sim.params.copy())
     while len(_PREPARED) > PREPARED:
         _PREPARED.pop(next(iter(_PREPARED)))

@@ -93,3 +93,25 @@ def test_compiled_chord_steps_give_the_same_motion(tmp_path, monkeypatch):
     assert np.ptp(plain[:, 0]) > 0.03
     assert_allclose(fast, plain, rtol=0, atol=1e-10)
     assert fast_factorisations < plain_factorisations
+
+
+def test_a_large_study_compiles_under_auto(tmp_path, monkeypatch):
+    """``solver.jit: auto`` compiles a study of ``AUTO_JIT_SAMPLES`` samples or more (lowered to
+    8 here): it says so, and its rows equal the uncompiled study's to 1e-10 m; ``false`` never
+    compiles."""
+    from tca_casadi.studies import study as study_module
+    from tca_casadi.studies.study import Study
+    from tca_casadi.solvers.collocation import clear_built_solvers
+    monkeypatch.setenv("TCA_CASADI_CACHE", str(tmp_path))
+    monkeypatch.setattr(study_module, "AUTO_JIT_SAMPLES", 8)
+    vary = {"bending.tca2.temperature": [25, 125, 3], "bending.tca3.temperature": [25, 125, 3]}
+
+    def run(jit):
+        clear_built_solvers()
+        return Study(Simulation.from_file(BENDING, [f"solver.jit={jit}"]), vary=vary).run()
+
+    fast, plain = run("auto"), run("false")
+    assert fast.info["compiled"] and not plain.info["compiled"] and "compiled (solver.jit)" in fast.summary()
+    assert list((tmp_path / "jit").glob("nlp_g_*.so"))
+    assert int(fast.info["converged"]) == 9 == int(plain.info["converged"])
+    assert_allclose(fast.tips(), plain.tips(), rtol=0, atol=1e-10)

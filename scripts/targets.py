@@ -1,0 +1,163 @@
+"""Issue 36's targets, each measured the way the issue states it (``bench.py --targets``).
+
+Every row: what is measured, the measured value, the target and whether it is met. Whole
+commands run in a fresh process (``python -m tca_casadi.cli ...``; the wall time and, where the
+target names memory, the child's peak resident memory); ``solver.jit`` runs compile once before
+the timed run (the compile is kept on disk, as a user's second run finds it).
+
+    python scripts/bench.py --targets [--quick]       # results/bench_targets.json
+"""
+import json
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIOS = ROOT / "scenarios"
+RANDOM_ROBOT = ROOT / "tests" / "data" / "robot_11_9_four_modules.yaml"
+#: the build and 101-step sweep, in a fresh process, timed after the imports
+SWEEP = """
+import json, sys, time
+started = time.perf_counter()
+import tca_casadi as tc
+from tca_casadi.simulation import Simulation
+from tca_casadi.studies.sweep import Sweep
+imported = time.perf_counter()
+sim = Simulation.from_file(sys.argv[1], sys.argv[2:])
+result = Sweep(sim, ["bending.tca2.temperature", "bending.tca3.temperature"], 25, 125, steps=101).run()
+done = time.perf_counter()
+print(json.dumps({"import_s": imported - started, "build_sweep_s": done - imported, "completed": result.completed}))
+"""
+
+
+def _run(command):
+    """``(wall seconds, peak resident memory of the child [MB], completed process)``."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    started = time.perf_counter()
+    process = subprocess.run(command, capture_output=True, text=True)
+    wall = time.perf_counter() - started
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    return wall, (peak if peak > before else float("nan")) / 1024, process
+
+
+def _cli(*arguments):
+    return [sys.executable, "-m", "tca_casadi.cli", *map(str, arguments)]
+
+
+def row(what, measured, target, unit, met, note=""):
+    return {"what": what, "measured": measured, "target": target, "unit": unit, "met": bool(met), "note": note}
+
+
+def warm_solve(repeats):
+    """The bending module after +1 degC on every TCA, from the previous point's solution and its
+    factorised Jacobian (what a sweep or a time step does), with ``solver.jit``: Newton alone
+    and with the point's Solution; uncompiled beside it."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from bench import median_time, nudge
+    from tca_casadi.simulation import Simulation
+    out = {}
+    for jit in ("false", "true"):
+        sim = Simulation.from_file(SCENARIOS / "bending_module.yaml", ["solver.algorithm=newton", f"solver.jit={jit}"])
+        cold = sim.solve(warn=False)
+        solver = sim.solver()
+        square, w = solver.square, cold.raw["w"]
+        lu = square.factorise(square.evaluate(w, sim.params)[1])
+        nudged = nudge(sim, sim.params)
+        out[f"newton_{jit}_s"], _ = median_time(lambda: square.newton(w, nudged, solver.options.tolerance, lu=lu),
+                                                repeats)
+        out[f"solve_{jit}_s"], solved = median_time(lambda: solver.solve_newton(nudged, w, lu=lu), repeats)
+        out[f"converged_{jit}"] = bool(solved.converged)
+    return out
+
+
+def build_and_sweep():
+    """Build + 101-step sweep of the bending module in a fresh process (imports timed apart),
+    uncompiled and with ``solver.jit`` (its compile done by an untimed first run)."""
+    out = {}
+    for jit in ("false", "true"):
+        command = [sys.executable, "-c", SWEEP, str(SCENARIOS / "bending_module.yaml"), f"solver.jit={jit}"]
+        if jit == "true":
+            subprocess.run(command, check=True, capture_output=True)
+        runs = [json.loads(subprocess.run(command, check=True, capture_output=True, text=True).stdout) for _ in range(3)]
+        out[jit] = {key: statistics.median(r[key] for r in runs) for key in ("import_s", "build_sweep_s")}
+        out[jit]["completed"] = all(r["completed"] for r in runs)
+    return out
+
+
+def random_robot():
+    """``tca-casadi solve`` on the random 4-module robot: wall time, peak memory, converged
+    with its accuracy met."""
+    with tempfile.TemporaryDirectory() as folder:
+        wall, peak, process = _run(_cli("solve", RANDOM_ROBOT, "--no-plot", "-o", folder))
+        report = json.loads((Path(folder) / "solution.json").read_text()) if process.returncode == 0 else {}
+    accuracy = report.get("accuracy") or {}
+    return {"wall_s": wall, "peak_mb": peak, "converged": bool(report.get("converged")),
+            "accuracy_met": bool(accuracy.get("met")), "exit": process.returncode}
+
+
+def arm_inverse():
+    """``tca-casadi inverse`` on the arm (whole call): to the tip of the arm with its bending
+    module's TCA 2 at 60 degC (a forward solve gives it, not timed)."""
+    from tca_casadi.simulation import Simulation
+    target = Simulation.from_file(SCENARIOS / "arm.yaml", ["bending.tca2.temperature=60"]).solve(warn=False).tip_position
+    with tempfile.TemporaryDirectory() as folder:
+        wall, _, process = _run(_cli("inverse", SCENARIOS / "arm.yaml", "--target-position", *(f"{x:.9f}" for x in target),
+                                     "--no-plot", "--quiet", "-o", folder))
+    return {"wall_s": wall, "exit": process.returncode, "reached": "REACHED" in process.stdout}
+
+
+def targets(quick=False):
+    """Every target's row (module docstring); ``quick``: the cheap ones, 0.5 s of Till's rod."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from bench import dynamics_rate, study_rates, till_cantilever
+    rows = []
+    warm = warm_solve(5 if quick else 50)
+    rows.append(row("bending module: warm solve after +1 degC, from the previous point's factors (solver.jit)",
+                    warm["solve_true_s"] * 1e3, 0.5, "ms", warm["converged_true"] and warm["solve_true_s"] <= 5e-4,
+                    f"Newton alone {warm['newton_true_s'] * 1e3:.3f} ms; uncompiled {warm['solve_false_s'] * 1e3:.2f} ms"))
+    sweep = build_and_sweep()
+    for jit in ("false", "true"):
+        r = sweep[jit]
+        rows.append(row(f"bending module: build + 101-step sweep, in a fresh process after its imports"
+                        f"{' (solver.jit)' if jit == 'true' else ''}", r["build_sweep_s"], 0.3, "s",
+                        r["completed"] and r["build_sweep_s"] <= 0.3, f"imports {r['import_s']:.2f} s before it"))
+    duration = 0.5 if quick else 25.0
+    till = till_cantilever(duration, jit=True)
+    rows.append(row(f"Till's steel cantilever, dt 2 ms, {duration:g} s, whole simulate call (solver.jit)",
+                    till["real_time_factor"], 20.0, "x real time", till["real_time_factor"] >= 20,
+                    f"{till['wall_s']:.2f} s; first mode {till['first_mode_hz']:.3f} Hz"))
+    for name, goal in ((("bending module", 20.0),) if quick else (("bending module", 20.0), ("arm", 2.0))):
+        rate = dynamics_rate(name, 0.002, 5 if quick else 50, jit=True)
+        rows.append(row(f"{name}: BDF2 dynamics at dt 2 ms (solver.jit)", rate["real_time_factor"], goal,
+                        "x real time", (rate["real_time_factor"] or 0) >= goal,
+                        f"{rate['step_s'] * 1e3:.2f} ms per step" if rate["step_s"] else rate.get("message", "")))
+    if not quick:
+        robot = random_robot()
+        rows.append(row("random 4-module robot (robot_11_9): tca-casadi solve, whole call", robot["wall_s"], 10.0, "s",
+                        robot["wall_s"] <= 10 and robot["converged"] and robot["accuracy_met"],
+                        f"converged {robot['converged']}, accuracy met {robot['accuracy_met']}"))
+        rows.append(row("random 4-module robot (robot_11_9): peak memory", robot["peak_mb"], 500.0, "MB",
+                        robot["peak_mb"] <= 500))
+        inverse = arm_inverse()
+        rows.append(row("arm: tca-casadi inverse, whole call", inverse["wall_s"], 2.0, "s",
+                        inverse["wall_s"] <= 2 and inverse["reached"], f"reached {inverse['reached']}"))
+        studies = study_rates(22, 2)
+        rows.append(row("bending module temperature box: study samples per second per core (serial)",
+                        studies["serial_samples_per_s"], 1000.0, "samples/s", studies["serial_samples_per_s"] >= 1000,
+                        f"{studies['samples']} samples"))
+    return rows
+
+
+def print_targets(rows):
+    width = max(len(r["what"]) for r in rows)
+    for r in rows:
+        value = r["measured"]
+        shown = "n/a" if value is None or not np.isfinite(value) else f"{value:.3g}"
+        print(f"{r['what']:<{width}}  {shown:>8} {r['unit']:<11} target {r['target']:g}  "
+              f"{'met' if r['met'] else 'NOT MET'}{'  (' + r['note'] + ')' if r['note'] else ''}")
