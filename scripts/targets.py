@@ -1,14 +1,13 @@
 """Issue 36's targets, each measured the way the issue states it (``bench.py --targets``).
 
 Every row: what is measured, the measured value, the target and whether it is met. Whole
-commands run in a fresh process (``python -m tca_casadi.cli ...``; the wall time and, where the
-target names memory, the child's peak resident memory); ``solver.jit`` runs compile once before
+commands run in a fresh process (the command line's ``main``; the wall time and, where the
+target names memory, that process's peak resident memory); ``solver.jit`` runs compile once before
 the timed run (the compile is kept on disk, as a user's second run finds it).
 
     python scripts/bench.py --targets [--quick]       # results/bench_targets.json
 """
 import json
-import resource
 import statistics
 import subprocess
 import sys
@@ -36,18 +35,22 @@ print(json.dumps({"import_s": imported - started, "build_sweep_s": done - import
 """
 
 
+#: a command in a fresh process that reports its own peak resident memory [kB] on stderr
+MEASURED = ("import resource, sys\nfrom tca_casadi.cli import main\ncode = main(sys.argv[1:])\n"
+            "print('PEAK_KB', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)\nsys.exit(code)")
+
+
 def _run(command):
-    """``(wall seconds, peak resident memory of the child [MB], completed process)``."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    """``(wall seconds, peak resident memory of the command's process [MB], completed process)``."""
     started = time.perf_counter()
     process = subprocess.run(command, capture_output=True, text=True)
     wall = time.perf_counter() - started
-    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    return wall, (peak if peak > before else float("nan")) / 1024, process
+    peaks = [line.split()[1] for line in process.stderr.splitlines() if line.startswith("PEAK_KB ")]
+    return wall, (float(peaks[-1]) / 1024 if peaks else float("nan")), process
 
 
 def _cli(*arguments):
-    return [sys.executable, "-m", "tca_casadi.cli", *map(str, arguments)]
+    return [sys.executable, "-c", MEASURED, *map(str, arguments)]
 
 
 def row(what, measured, target, unit, met, note=""):

@@ -220,6 +220,9 @@ def control(solver, solution, params, refine=True):
                                              f"({refinements + 1}x)").replace(
             residual=trial.result.residual, nit=trial.iterations + solution.iterations,
             solve_time_s=trial.solve_time_s + solution.solve_time_s)
+        solver.release_higher()                      # this mesh is left behind: its estimate is done
+        if refinements:                              # an intermediate mesh: no solve starts on it again
+            solver.release()
         solver, solution, refinements, previous = finer, trial, refinements + 1, found
 
 

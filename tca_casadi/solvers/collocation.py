@@ -33,6 +33,12 @@ def clear_built_solvers():
     _built.clear()
 
 
+def forget(solver):
+    """Stop keeping ``solver`` (it lives on while something else holds it)."""
+    for key in [k for k, v in _built.items() if v is solver]:
+        del _built[key]
+
+
 class CollocationSolver:
     """Direct collocation + IPOPT. ``solve(params, initial=None)`` -> :class:`Solution`."""
     method = "collocation"
@@ -80,6 +86,18 @@ class CollocationSolver:
         while len(_built) > BUILT_SOLVERS:
             _built.popitem(last=False)
         return solver
+
+    def release_higher(self):
+        """Forget the degree d + 1 solver of the error estimate (kept and shared otherwise): a
+        mesh that refinement left behind needs no more estimates, and on a fine mesh that
+        solver is most of the memory."""
+        if self._higher is not None:
+            forget(self._higher)
+            self._higher = None
+
+    def release(self):
+        """Stop keeping this solver for later :meth:`shared` calls (a mesh refinement left behind)."""
+        forget(self)
 
     def finer(self, meshes):
         """The solver of the same structure and degree on ``meshes`` (kept like :meth:`shared`)."""

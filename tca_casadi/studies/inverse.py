@@ -23,6 +23,7 @@ every shipped robot (``scripts/bench.py``: the bending module about 40 ms agains
 query, the refined arm about 0.4 s against minutes: IPOPT's exact-Hessian iterations on 4272
 unknowns need repeated factorisations for inertia correction).
 """
+import itertools
 import logging
 import time
 
@@ -209,13 +210,18 @@ class InverseStatics:
         return params
 
     def start_points(self):
-        """Initial ``tau``: the middle of the box, then a scrambled Sobol' set (seed 0)."""
-        points = [np.full(len(self.parameters), 0.5)]
+        """Initial ``tau``, one at a time: the middle of the box, then a scrambled Sobol' set
+        (seed 0), drawn only if the middle does not reach the target (scipy.stats takes 0.5 s
+        to import)."""
+        yield np.full(len(self.parameters), 0.5)
         if self.starts > 1:
-            from scipy.stats import qmc                 # only for several starts (1 s to import)
+            from scipy.stats import qmc
             sobol = qmc.Sobol(len(self.parameters), scramble=True, seed=0)
-            points += list(sobol.random(2 ** int(np.ceil(np.log2(self.starts - 1))))[: self.starts - 1])
-        return points
+            yield from sobol.random(2 ** int(np.ceil(np.log2(self.starts - 1))))[: self.starts - 1]
+
+    def middle(self):
+        """The first start point: the middle of the box."""
+        return next(self.start_points())
 
     def solve(self, target, initial=None):
         """Temperatures that bring the target point to ``target`` (a :class:`Target`).
@@ -227,8 +233,7 @@ class InverseStatics:
         vector = self._target_vector(target)
         best, iterations, tried = None, 0, 0
         seeds = [(initial.w, initial.tau)] if initial is not None and initial.w is not None else []
-        candidates = seeds + self.start_points()
-        for candidate in candidates:
+        for candidate in itertools.chain(seeds, self.start_points()):
             w0, tau0 = candidate if isinstance(candidate, tuple) else (self._forward_w(candidate), candidate)
             if w0 is None:
                 continue
@@ -241,7 +246,7 @@ class InverseStatics:
                 break
         if tried == 0:       # no start has a forward equilibrium: try from the reference shape
             from ..solvers.guess import reference_guess
-            tau0 = self.start_points()[0]
+            tau0 = self.middle()
             attempt = self._attempt(reference_guess(self.solver.nlp, self.params_at(tau0)), tau0, vector, target)
             iterations, tried = iterations + attempt["iterations"], 1
         if best is None:
@@ -363,7 +368,7 @@ class InverseStatics:
         continuation from the first start's forward equilibrium (not from the answer's state),
         or from the reference state if that fails."""
         params = self.params_at(best["tau"])
-        start = self._forward(self.start_points()[0])
+        start = self._forward(self.middle())
         forward = None
         if start.converged:
             follower = BranchFollower(self.solver, start.parameters, params - start.parameters)

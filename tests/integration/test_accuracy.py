@@ -78,3 +78,22 @@ def test_the_refined_solver_serves_later_warm_solves():
     assert [len(m.intervals) for m in solver.nlp.meshes] == first.accuracy.intervals
     warm = sim.solve(warm_start=first)
     assert warm.converged and warm.raw["w"].size == first.raw["w"].size
+
+
+def test_refinement_keeps_only_the_meshes_it_may_need_again():
+    """What refinement leaves behind is not kept: the error estimate's degree d + 1 solvers of
+    every mesh but the last, and every intermediate mesh's solver (the starting mesh's stays:
+    a later cold solve of the same robot starts there). The random 4-module robot of issue 36
+    peaked at 640 MB with them and 471 MB without (``bench.py --targets``)."""
+    from tca_casadi.solvers import collocation
+    collocation.clear_built_solvers()
+    scenario = random_robot(22)                          # refined in two rounds (docs/numerics.md)
+    sim = Simulation.from_file(scenario)
+    solution = sim.solve()
+    assert solution.converged and solution.accuracy.refinements >= 2
+    kept = {(len(key[2][0].intervals) if key[2] else None, key[3]) for key in collocation._built}
+    final = len(sim.solver().nlp.meshes[0].intervals)
+    degree = sim.solver().degree
+    assert kept == {(None, degree), (final, degree), (final, degree + 1)}, kept
+    again = Simulation.from_file(scenario).solve()       # the same answer from a fresh start
+    np.testing.assert_allclose(again.tip_position, solution.tip_position, rtol=0, atol=1e-12)
