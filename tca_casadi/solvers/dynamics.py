@@ -2,17 +2,9 @@
 the boundary-value problem in s on one built NLP (:mod:`tca_casadi.discretisation.dynamics`).
 
 The NLP's time derivatives are ``x_t = c0 x + x_hist`` for the strain deviations and the
-velocities ``x = [xi - xi*, q, w]`` at every node; an integrator is a choice of ``c0`` and of
-the history from the previous steps' node values (step ``h``):
-
-* ``bdf1`` (implicit Euler, order 1, used for the first step of ``bdf2``):
-  ``c0 = 1/h``, ``x_hist = -x_n / h``;
-* ``bdf2`` (order 2, L-stable: damps what the step cannot resolve):
-  ``c0 = 3/(2h)``, ``x_hist = (-4 x_n + x_{n-1}) / (2h)``;
-* ``midpoint`` (implicit midpoint, order 2, symplectic: no numerical damping; for checking):
-  the unknown is the midpoint state ``z = x_{n+1/2}``, solved at the parameters of
-  ``t_n + h/2`` with ``c0 = 2/h``, ``x_hist = -2 x_n / h`` (so ``x_t = (x_{n+1} - x_n)/h``),
-  and ``x_{n+1} = 2 z - x_n``.
+velocities ``x = [xi - xi*, q, w]`` at every node; the integrators (BDF2, implicit Euler, the
+implicit midpoint rule) are choices of ``c0`` and of the history from the previous steps' node
+values (:mod:`.integrators`).
 
 The positions and orientations are not time-stepped: they follow, along s, from the base and
 the strains at each instant, as in the statics; the velocity compatibility makes ``p_t = R q``.
@@ -28,9 +20,8 @@ from ..model.dynamics import (elastic_energy_density, inertia_per_length, inerti
 from ..model.rotations import rotation_numpy, rotations_of
 from .collocation import CollocationSolver
 from .compiled import has_compiler
+from .integrators import ImplicitEuler, integrator_named
 
-
-INTEGRATORS = ("bdf2", "midpoint", "bdf1")
 #: ``solver.jit: auto`` compiles the residual of a dynamic run of at least this many steps (when
 #: a C compiler is found): a compile of 1-2 s (kept on disk) against about 0.4 ms saved per step
 AUTO_JIT_STEPS = 5000
@@ -154,7 +145,7 @@ class RodDynamics:
     sim : Simulation
         Its robot, solver options and mesh (the static solver's, after any refinement).
     integrator : str
-        One of :data:`INTEGRATORS`.
+        The name of one of :data:`~tca_casadi.solvers.integrators.INTEGRATORS`.
     damping : KelvinVoigt, optional
         The rods' viscosity (default none).
     steps : int, optional
@@ -163,8 +154,7 @@ class RodDynamics:
     """
 
     def __init__(self, sim, integrator="bdf2", damping=None, steps=None):
-        if integrator not in INTEGRATORS:
-            raise ScenarioError(f"dynamics.integrator: {integrator!r} is not one of {', '.join(INTEGRATORS)}")
+        integrator = integrator_named(integrator)
         if sim.robot.obstacles:
             raise ScenarioError("obstacles: rod dynamics with contact is not modelled (yet); "
                                 "set dynamics.enabled: false for quasi-static steps")
@@ -189,24 +179,14 @@ class RodDynamics:
         return self.states[-1]
 
     def _coefficients(self, h):
-        """``(c0, history per module)`` for the next step of size ``h``. BDF2 with variable
-        steps (ratio ``r = h / h_prev``): ``x_t = [(1 + 2r)/(1 + r) x_{n+1} - (1 + r) x_n
-        + r^2/(1 + r) x_{n-1}] / h``."""
+        """``(c0, history per module)`` for the next step of size ``h``: the integrator's (its
+        first step's rule while there is no step before)."""
         now = self.states[-1]
-        kind = self.integrator if not (self.integrator == "bdf2" and len(self.states) < 2) else "bdf1"
-        ratio = h / (now.t - self.states[-2].t) if kind == "bdf2" else 1.0
-        histories = []
-        for m, (deviation, velocity) in enumerate(now.nodes):
-            x_n = np.vstack([deviation, velocity])
-            if kind == "bdf1":
-                histories.append(-x_n / h)
-            elif kind == "bdf2":
-                before = np.vstack(self.states[-2].nodes[m])
-                histories.append((-(1.0 + ratio) * x_n + ratio ** 2 / (1.0 + ratio) * before) / h)
-            else:
-                histories.append(-2.0 * x_n / h)
-        c0 = {"bdf1": 1.0 / h, "bdf2": (1.0 + 2.0 * ratio) / ((1.0 + ratio) * h), "midpoint": 2.0 / h}[kind]
-        return c0, histories
+        nodes = [np.vstack(x) for x in now.nodes]
+        if len(self.states) < 2:
+            return self.integrator.first().coefficients(h, nodes)
+        before = self.states[-2]
+        return self.integrator.coefficients(h, nodes, [np.vstack(x) for x in before.nodes], now.t - before.t)
 
     def step(self, params, h, balance=True):
         """Advance by ``h`` [s] to the robot parameters ``params`` (at the end of the step; the
@@ -217,20 +197,21 @@ class RodDynamics:
         now = self.states[-1]
         c0, histories = self._coefficients(h)
         params = np.asarray(params, float)
-        solved_at = 0.5 * (params + now.params) if self.integrator == "midpoint" else params
+        scheme = self.integrator
+        solved_at = scheme.parameters_at(params, now.params)
         full = self.solver.parameters(solved_at, c0, self.damping, histories)
-        guess = self._predicted(now.t + (0.5 * h if self.integrator == "midpoint" else h))
+        guess = self._predicted(now.t + scheme.fraction * h)
         solution = self.solver.solve_newton(full, guess, lu=self._lu, balance=balance)
         self._lu = self.solver.square.last_lu           # chord steps of the next step start on it
         self.last_status = solution.result
         if not solution.converged:
             return None, solution
         w = solution.raw["w"]
-        if self.integrator == "midpoint":
-            middle = StepState(now.t + 0.5 * h, self.solver.node_values(w), w, solved_at)
+        if scheme.at_midpoint:
+            middle = StepState(now.t + scheme.fraction * h, self.solver.node_values(w), w, solved_at)
             self._midpoints = (self._midpoints + [middle])[-2:]
-            w = 2.0 * w - now.w
-        rotation = None if self.integrator == "midpoint" else solution.modules[self.sim.robot.tip_index].R[:, :, -1]
+            w = scheme.end(w, now.w)
+        rotation = None if scheme.at_midpoint else solution.modules[self.sim.robot.tip_index].R[:, :, -1]
         state = StepState(now.t + h, self.solver.node_values(w), w, params, rotation)
         self.states = (self.states + [state])[-2:]
         self._history_w = (self._history_w + [(state.t, w)])[-3:]
@@ -273,7 +254,7 @@ class RodDynamics:
         midpoint rule, extrapolated linearly to the state's time from the last two solved
         midpoint states (from rest and the first one after the first step), whose velocities
         are free of the period-2 oscillation that the extrapolated end states carry."""
-        if self.integrator != "midpoint" or not self._midpoints:
+        if not self.integrator.at_midpoint or not self._midpoints:
             return self.tip_velocity(state)
         last = self._midpoints[-1]
         if len(self._midpoints) == 1:
@@ -289,9 +270,9 @@ class RodDynamics:
         solution of the step's equations), with the step's status and the global balance of the
         solved midpoint state ``solved`` (an extrapolated state has no consistent acceleration
         to balance)."""
-        h = state.t - previous.t
-        histories = [-np.vstack(nodes) / h for nodes in previous.nodes]
-        full = self.solver.parameters(state.params, 1.0 / h, self.damping, histories)
+        # the end's rates as implicit Euler's over the step: (x_{n+1} - x_n) / h
+        c0, histories = ImplicitEuler().coefficients(state.t - previous.t, [np.vstack(x) for x in previous.nodes])
+        full = self.solver.parameters(state.params, c0, self.damping, histories)
         end = self.solver.evaluate(state.w, full, self.last_status, balance=False)
         warnings = [w for w in end.warnings if w.kind != "global_balance"] + \
                    [w for w in solved.warnings if w.kind == "global_balance"]

@@ -184,7 +184,7 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
                               f"converge even halved {HALVINGS} times ({solution.message})")
             break
         during = None
-        if config.integrator == "midpoint":
+        if dynamics.integrator.at_midpoint:
             during, solution = solution, dynamics.end_solution(state, previous, solution)
         series.solutions.append(solution)
         series.tip_velocities.append(dynamics.output_tip_velocity(state))
