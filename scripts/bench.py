@@ -196,7 +196,7 @@ def simulate_cycle(dt, repeats, jit=False):
     """Median wall time [s] of the bending module's 60 s heating/cooling cycle at output step
     ``dt`` (the NLP built, compiled with ``jit``, and the t = 0 state solved before timing; the
     thermal integration and every output time's equilibrium timed), and the real-time factor."""
-    from tca_casadi.studies.timeline import TimeSimulation
+    from tca_casadi.time_simulation.timeline import TimeSimulation
     sim = Simulation.from_file(SCENARIOS / "bending_module.yaml", CYCLE + [f"solver.jit={str(jit).lower()}"])
     sim.solve(warn=False)
     seconds, series = median_time(lambda: TimeSimulation(sim, dt=dt).run(), repeats)
@@ -276,7 +276,7 @@ def till_stages(duration):
     in-process (BDF2, 2 ms; the scenario, the NLP and the static start before it, timed apart),
     by stage, with each stage's time per step."""
     from stages import StageProfile
-    from tca_casadi.studies.timeline import TimeSimulation
+    from tca_casadi.time_simulation.timeline import TimeSimulation
     started = time.perf_counter()
     sim = Simulation.from_file(SCENARIOS / "analytic" / "steel_cantilever.yaml", [f"duration={duration}"])
     run = TimeSimulation(sim, dt=0.002)

@@ -17,7 +17,7 @@ def _targets():
     from tca_casadi.solvers.collocation import CollocationSolver
     from tca_casadi.solvers.newton import OrderedLU, SquareSystem
     from tca_casadi.simulation import Simulation
-    from tca_casadi.studies.motion import EnergyAccount
+    from tca_casadi.time_simulation.motion import EnergyAccount
     return [("NLP builds", CollocationSolver, "__init__"),
             ("static solves (a run's start)", Simulation, "solve"),
             ("residual evaluations (CasADi)", SquareSystem, "residual"),

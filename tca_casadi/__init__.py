@@ -19,7 +19,7 @@ _LAZY = {"Simulation": ".simulation", "solve": ".simulation", "Solution": ".solu
          "Sweep": ".studies", "SweepResult": ".studies", "InverseStatics": ".studies",
          "InverseResult": ".studies", "Target": ".studies", "Scenario": ".scenario",
          "load_scenario": ".scenario", "Robot": ".model", "TcaLaw": ".model",
-         "TimeSimulation": ".studies.timeline", "simulate": ".studies.timeline",
+         "TimeSimulation": ".time_simulation.timeline", "simulate": ".time_simulation.timeline",
          "Study": ".studies.study", "StudyResult": ".studies.study_result",
          "Fit": ".studies.fit", "FitResult": ".studies.fit_result",
          "Plan": ".control", "PlanResult": ".control"}

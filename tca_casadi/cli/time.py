@@ -8,7 +8,7 @@ from .common import _results, _view, _vtk_files, _with_progress
 
 def _simulate(args):
     from ..simulation import Simulation
-    from ..studies.timeline import TimeSimulation
+    from ..time_simulation.timeline import TimeSimulation
     from ..units import to_si
     from ..control.mpc import mpc_drives
     overrides = list(args.overrides) + ([] if args.timeline is None else _timeline_overrides(args.timeline))

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import ScenarioError, SolverError
 from ..results import ResultAPI, status_of
-from ..studies.timeline import mpc_drives  # noqa: F401  (re-exported)
+from ..time_simulation.timeline import mpc_drives  # noqa: F401  (re-exported)
 from .plan import HeatingRecord, Plan, _NoEquilibrium, held_from, read_path
 
 #: the tip error is integrated only within this many tolerances of the target (anti-windup)

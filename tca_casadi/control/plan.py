@@ -318,7 +318,7 @@ class Plan:
     def __init__(self, sim, target, objective="time", horizon=10.0, nodes=60, vary=None, bounds=None,
                  tolerance=1e-4, by=None, initial_temperatures=None, point="tip", direction=None,
                  angle_tolerance=np.radians(1.0), power_budget=None):
-        from ..studies.timeline import TimeSimulation
+        from ..time_simulation.timeline import TimeSimulation
         if objective not in OBJECTIVES:
             raise ScenarioError(f"--objective {objective!r}: one of {', '.join(OBJECTIVES)}")
         if not horizon > 0 or not np.isfinite(horizon):

@@ -104,7 +104,7 @@ def frame_indices(t, fps, speed_up):
 
 def save_time_animation(series, directory, fps=10, max_frames=150, progress=None, **view):
     """``simulate.gif`` (and ``simulate.mp4`` when ffmpeg is on the PATH) of a ``simulate``
-    :class:`~tca_casadi.studies.heating.TimeSeries`: the robot at the solved output times, at
+    :class:`~tca_casadi.time_simulation.heating.TimeSeries`: the robot at the solved output times, at
     real time or the smallest speed-up of :data:`SPEED_UPS` that fits ``max_frames`` frames,
     with a clock and the temperatures of the heated TCAs that are warm (0.5 K above the run's
     lowest temperature). Returns ``(paths, speed_up)``."""

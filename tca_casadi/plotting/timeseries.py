@@ -83,7 +83,7 @@ def _energies(axis, t, energies, n):
     """A dynamic run's energy account [mJ]: kinetic, elastic, gravitational (from its start),
     the actuators' and loads' work, what damping dissipated and the balance (zero up to the
     time discretisation)."""
-    from ..studies.motion import ENERGY_COLUMNS
+    from ..time_simulation.motion import ENERGY_COLUMNS
     shown = energies * 1e3
     shown[:, ENERGY_COLUMNS.index("gravitational_energy")] -= shown[0, ENERGY_COLUMNS.index("gravitational_energy")]
     for k, name in enumerate(ENERGY_COLUMNS):

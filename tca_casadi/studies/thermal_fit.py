@@ -151,7 +151,7 @@ class ThermalFitModel:
     as :class:`~tca_casadi.studies.fit.FitModel`)."""
 
     def __init__(self, sim, data, parameters):
-        from .timeline import TimeSimulation
+        from ..time_simulation.timeline import TimeSimulation
         self.sim, self.data, self.parameters = sim, data, parameters
         self.timed = TimeSimulation(sim, duration=max(float(data.times[-1]), 1e-9))     # built once
         keys = [a.key for a in self.timed.heated]

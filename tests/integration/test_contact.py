@@ -229,7 +229,7 @@ def test_dynamics_refuses_contact_with_a_clear_message():
     scenario = pushed()
     scenario["materials"]["m"]["density"] = 1100
     sim = Simulation.from_file(dict(scenario, dynamics={"enabled": True}, duration=0.01))
-    from tca_casadi.studies.timeline import TimeSimulation
+    from tca_casadi.time_simulation.timeline import TimeSimulation
     with pytest.raises(ScenarioError, match="rod dynamics with contact is not modelled"):
         TimeSimulation(sim, dt=0.005).run()
 

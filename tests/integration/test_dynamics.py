@@ -8,7 +8,7 @@ from conftest import SCENARIOS
 from tca_casadi import Simulation
 from tca_casadi.model.dynamics import KelvinVoigt
 from tca_casadi.solvers.dynamics import RodDynamics
-from tca_casadi.studies.spectrum import dominant_frequencies
+from tca_casadi.time_simulation.spectrum import dominant_frequencies
 
 CANTILEVER = SCENARIOS / "analytic" / "released_cantilever.yaml"
 E, D, L, RHO = 1e6, 5e-3, 0.2, 1000.0
@@ -182,7 +182,7 @@ def test_a_connector_mass_off_its_axis_keeps_energy_and_balance_in_a_large_3d_sw
     inertia included) to 1e-8."""
     import yaml
 
-    from tca_casadi.studies.timeline import TimeSimulation
+    from tca_casadi.time_simulation.timeline import TimeSimulation
     scenario = yaml.safe_load(TWO_SEGMENTS)
     timed = TimeSimulation(Simulation.from_file(scenario), dt=0.005)
     series = timed.run()

@@ -6,7 +6,7 @@ from numpy.testing import assert_allclose
 
 from conftest import SCENARIOS
 from tca_casadi import Simulation
-from tca_casadi.studies.timeline import TimeSimulation
+from tca_casadi.time_simulation.timeline import TimeSimulation
 
 PICK = SCENARIOS / "arm_pick_and_place.yaml"
 HOLDING = ["base.position=[0, 0, -10 mm]", "twisting.tca.temperature=90", "bar.held=true"]

@@ -9,7 +9,7 @@ import pytest
 from random_robots import random_robot
 from tca_casadi import Simulation
 from tca_casadi.discretisation.dynamics import time_scale
-from tca_casadi.studies.timeline import TimeSimulation
+from tca_casadi.time_simulation.timeline import TimeSimulation
 
 
 def _stepped(seed, integrator):

@@ -10,8 +10,8 @@ from numpy.testing import assert_allclose
 from conftest import SCENARIOS
 from tca_casadi import Simulation
 from tca_casadi.cli import main
-from tca_casadi.studies.spectrum import dominant_frequencies
-from tca_casadi.studies.timeline import TimeSimulation
+from tca_casadi.time_simulation.spectrum import dominant_frequencies
+from tca_casadi.time_simulation.timeline import TimeSimulation
 
 CANTILEVER = str(SCENARIOS / "analytic" / "released_cantilever.yaml")
 BENDING = str(SCENARIOS / "bending_module.yaml")

@@ -8,7 +8,7 @@ import pytest
 from conftest import SCENARIOS
 from tca_casadi import Simulation
 from tca_casadi.plotting.timeseries import event_labels, save_timeseries_png
-from tca_casadi.studies.timeline import TimeSimulation
+from tca_casadi.time_simulation.timeline import TimeSimulation
 
 
 def _colours(ax):

@@ -9,7 +9,7 @@ from conftest import SCENARIOS
 from tca_casadi import Simulation
 from tca_casadi.model.thermal import thermal_law
 from tca_casadi.solvers.thermal import Drive, Schedule, integrate
-from tca_casadi.studies.heating import follow_temperatures
+from tca_casadi.time_simulation.heating import follow_temperatures
 
 BENDING = SCENARIOS / "bending_module.yaml"
 KEYS = ["bending.tca2", "bending.tca3"]

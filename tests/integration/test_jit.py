@@ -46,7 +46,7 @@ def test_auto_compiles_only_a_long_dynamic_run_and_only_with_a_compiler(tmp_path
     its step's residual compiled, with the same motion to 1e-12 m and ``compiled_residual`` in
     the report; without a C compiler it runs uncompiled, and says so."""
     from tca_casadi.solvers import dynamics
-    from tca_casadi.studies.timeline import TimeSimulation
+    from tca_casadi.time_simulation.timeline import TimeSimulation
     monkeypatch.setenv("TCA_CASADI_CACHE", str(tmp_path))
     cantilever = SCENARIOS / "analytic" / "steel_cantilever.yaml"
 
@@ -72,7 +72,7 @@ def test_compiled_chord_steps_give_the_same_motion(tmp_path, monkeypatch):
     while they cut the residual threefold instead of tenfold: a different sequence of iterates
     to the same tolerance, so 100 steps of the steel cantilever's free vibration agree with the
     uncompiled run to 1e-10 m (the tip moves about 60 mm), with fewer fresh Jacobians."""
-    from tca_casadi.studies.timeline import TimeSimulation
+    from tca_casadi.time_simulation.timeline import TimeSimulation
     from tca_casadi.solvers.newton import SquareSystem
     monkeypatch.setenv("TCA_CASADI_CACHE", str(tmp_path))
     cantilever = SCENARIOS / "analytic" / "steel_cantilever.yaml"

@@ -11,7 +11,7 @@ from conftest import SCENARIOS
 from tca_casadi import Simulation
 from tca_casadi.cli import main
 from tca_casadi.control import Plan
-from tca_casadi.studies.timeline import TimeSimulation
+from tca_casadi.time_simulation.timeline import TimeSimulation
 
 HEATING = SCENARIOS / "bending_module_heating.yaml"
 #: TCA 2 at 60 degC in steady state puts the tip here

@@ -34,7 +34,7 @@ def _sequence():
 
 
 def _time_series():
-    from tca_casadi.studies.timeline import TimeSimulation
+    from tca_casadi.time_simulation.timeline import TimeSimulation
     return TimeSimulation(tc.Simulation.from_file(HEATING), dt=20.0).run()
 
 

@@ -9,7 +9,7 @@ from numpy.testing import assert_allclose
 from conftest import SCENARIOS
 from tca_casadi import Simulation
 from tca_casadi.cli import main
-from tca_casadi.studies.timeline import TimeSimulation
+from tca_casadi.time_simulation.timeline import TimeSimulation
 
 BENDING = str(SCENARIOS / "bending_module.yaml")
 CYCLE = ["bending.tca2.drive={kind: power, value: 0}", "bending.tca3.drive={kind: power, value: 0}", "duration=40",

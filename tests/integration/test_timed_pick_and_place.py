@@ -10,7 +10,7 @@ from conftest import SCENARIOS
 from tca_casadi import Simulation
 from tca_casadi.studies.objects import ObjectTracker
 from tca_casadi.studies.sequence import tip_yaw
-from tca_casadi.studies.timeline import TimeSimulation
+from tca_casadi.time_simulation.timeline import TimeSimulation
 
 TIMED = SCENARIOS / "arm_pick_and_place_timed.yaml"
 PICK = SCENARIOS / "arm_pick_and_place.yaml"

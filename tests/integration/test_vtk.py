@@ -11,7 +11,7 @@ from numpy.testing import assert_allclose
 from conftest import SCENARIOS
 from tca_casadi import Simulation
 from tca_casadi.cli import main
-from tca_casadi.studies.timeline import TimeSimulation
+from tca_casadi.time_simulation.timeline import TimeSimulation
 from tca_casadi.vtk_files import read_collection, write_series
 
 

@@ -79,7 +79,7 @@ def test_setpoint_initial_state_is_its_steady_state():
 
 def test_step_response_of_a_first_order_lag():
     """10-90 % rise tau ln 9 and 2 % settling tau ln 50 of 1 - exp(-t/tau) after an event at 1 s."""
-    from tca_casadi.studies.timeline import step_response
+    from tca_casadi.time_simulation.timeline import step_response
     tau = LAW.time_constant
     t = np.linspace(0.0, 30 * tau, 30001)
     y = 25.0 + 50.0 * (1.0 - np.exp(-np.clip(t - 1.0, 0.0, None) / tau))

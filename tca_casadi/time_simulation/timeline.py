@@ -6,7 +6,7 @@ or linearly over its ramp; the values between events follow from the scenario af
 TCAs with a ``power``, ``voltage`` or ``current`` drive get their temperatures from the thermal
 model (:mod:`tca_casadi.solvers.thermal`), starting from the steady state of their drive at
 t = 0; every other parameter follows the timeline. At every output time the quasi-static
-equilibrium is followed from the previous one (:func:`~tca_casadi.studies.heating.follow_parameters`).
+equilibrium is followed from the previous one (:func:`~tca_casadi.time_simulation.heating.follow_parameters`).
 """
 import copy
 
@@ -301,8 +301,8 @@ class TimeSimulation:
         grasp checked as in ``sequence``; carried; put down). A grasp outside the object stops
         the run there; one not across the object's long axis is a warning."""
         from ..errors import PhysicsWarning
-        from .objects import ObjectTracker
-        from .sequence import GRIP_ANGLE_TOLERANCE
+        from ..studies.objects import ObjectTracker
+        from ..studies.sequence import GRIP_ANGLE_TOLERANCE
         if not self.sim.scenario.objects:
             return
         tracker = ObjectTracker(self.sim.scenario, self.sim.robot)
