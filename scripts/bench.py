@@ -360,7 +360,7 @@ def study_rates(per_axis, design_per_length):
     processes (their start-up, the NLP builds and the nominal solve included: the wall time of
     ``Study.run``), and a design study with rebuilt geometry (5 module lengths x
     ``design_per_length`` temperatures, one NLP build per length)."""
-    from tca_casadi.studies.study import Study
+    from tca_casadi.studies.batch.study import Study
     vary = {f"bending.tca{k}.temperature": [25, 125, per_axis] for k in (1, 2, 3)}
     out = {"samples": per_axis ** 3}
     for label, workers in (("serial", None), ("processes_2", 2)):

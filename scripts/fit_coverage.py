@@ -25,7 +25,7 @@ TIP = ["tip_x", "tip_y", "tip_z"]
 def coverage(sim, repetitions, experiments=10):
     """``(inside, intervals, residual scales)``: intervals holding the truth, intervals in all,
     and each fit's residual RMS over the noise."""
-    from tca_casadi.studies.fit import Fit, synthetic_measurements
+    from tca_casadi.studies.fit.least_squares import Fit, synthetic_measurements
     inside, scales = 0, []
     for seed in range(repetitions):
         rng = np.random.default_rng(seed)

@@ -32,11 +32,11 @@ NOISE_K = 0.3
 
 
 def make(experiments=50, seed=SEED):
-    """The :class:`~tca_casadi.studies.fit.Measurements` of the example."""
+    """The :class:`~tca_casadi.studies.fit.least_squares.Measurements` of the example."""
     from scipy.stats import qmc
 
     import tca_casadi as tc
-    from tca_casadi.studies.fit import synthetic_measurements
+    from tca_casadi.studies.fit.least_squares import synthetic_measurements
     sim = tc.Simulation.from_file(ROOT / "scenarios" / "bending_module.yaml")
     temperatures = 25 + 100 * qmc.LatinHypercube(3, seed=seed).random(experiments)
     inputs = {f"bending.tca{k + 1}.temperature": np.round(temperatures[:, k], 2) for k in range(3)}
@@ -47,21 +47,21 @@ def make_heating(seed=SEED):
     """The heating curve of ``scenarios/bending_module_heating.yaml``: TCA 2's temperature every
     second for 80 s at :data:`HEATING_TRUTH` with :data:`NOISE_K` of noise."""
     import tca_casadi as tc
-    from tca_casadi.studies.thermal_fit import synthetic_heating_curve
+    from tca_casadi.studies.fit.thermal import synthetic_heating_curve
     sim = tc.Simulation.from_file(ROOT / "scenarios" / "bending_module_heating.yaml")
     return synthetic_heating_curve(sim, HEATING_TRUTH, ["bending.tca2.temperature"], np.arange(0.0, 80.5, 1.0),
                                    NOISE_K, seed)
 
 
 def main(argv=None):
-    from tca_casadi.studies.fit import write_measurements
+    from tca_casadi.studies.fit.least_squares import write_measurements
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("-o", "--output", type=Path, default=None)
     parser.add_argument("--experiments", type=int, default=50)
     parser.add_argument("--heating", action="store_true", help="the heating curve instead")
     args = parser.parse_args(argv)
     if args.heating:
-        from tca_casadi.studies.thermal_fit import write_heating_curve
+        from tca_casadi.studies.fit.thermal import write_heating_curve
         output = args.output or ROOT / "data" / "bending_module_heating_curve.csv"
         output.parent.mkdir(parents=True, exist_ok=True)
         truth = ", ".join(f"{k} = {v:g}" for k, v in HEATING_TRUTH.items())

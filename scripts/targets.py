@@ -26,7 +26,7 @@ import json, sys, time
 started = time.perf_counter()
 import tca_casadi as tc
 from tca_casadi.simulation import Simulation
-from tca_casadi.studies.sweep import Sweep
+from tca_casadi.studies.sweep.run import Sweep
 imported = time.perf_counter()
 sim = Simulation.from_file(sys.argv[1], sys.argv[2:])
 result = Sweep(sim, ["bending.tca2.temperature", "bending.tca3.temperature"], 25, 125, steps=101).run()

@@ -20,8 +20,8 @@ _LAZY = {"Simulation": ".simulation", "solve": ".simulation", "Solution": ".solu
          "InverseResult": ".studies", "Target": ".studies", "Scenario": ".scenario",
          "load_scenario": ".scenario", "Robot": ".model", "TcaLaw": ".model",
          "TimeSimulation": ".time_simulation.timeline", "simulate": ".time_simulation.timeline",
-         "Study": ".studies.study", "StudyResult": ".studies.study_result",
-         "Fit": ".studies.fit", "FitResult": ".studies.fit_result",
+         "Study": ".studies.batch.study", "StudyResult": ".studies.batch.result",
+         "Fit": ".studies.fit.least_squares", "FitResult": ".studies.fit.result",
          "Plan": ".control", "PlanResult": ".control"}
 
 __all__ = list(_LAZY) + ["ScenarioError", "SolverError", "ModelError", "OutputError", "TcaError",

@@ -7,7 +7,7 @@ from .common import _kelvin, _number, _results, _with_progress
 
 def _fit(args):
     from ..simulation import Simulation
-    from ..studies.fit import Fit
+    from ..studies.fit.least_squares import Fit
     from ..units import to_si
     sim = Simulation.from_file(Path(args.scenario), args.overrides, allow_code=args.allow_code)
     sigmas = {}

@@ -8,7 +8,7 @@ from .common import _results, _view, _vtk_files, _with_progress
 def _sequence(args):
     from ..plotting.animation import save_animation, save_step_pngs
     from ..simulation import Simulation
-    from ..studies.sequence import run_sequence
+    from ..studies.sequence.steps import run_sequence
     sim = Simulation.from_file(Path(args.scenario), args.overrides, allow_code=args.allow_code)
     frames = 0 if args.no_animation else max(args.frames, 0)
     stale = ["step_*.png"] + (["sequence.gif", "sequence.mp4"] if args.no_animation else []) + \

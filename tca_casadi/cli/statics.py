@@ -78,7 +78,7 @@ def _solve(args):
                   stale=(["robot.png"] if args.no_plot else []) + vtk_stale) as run:
         solution = sim.solve(warn=False)          # its warnings are in the summary and solution.json
         written = list(solution.save(run.staging))
-        from ..studies.objects import object_poses
+        from ..studies.sequence.objects import object_poses
         objects = object_poses(sim.scenario, sim.robot, solution)
         if not args.no_plot:
             from ..plotting import save_robot_png

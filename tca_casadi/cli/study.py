@@ -7,7 +7,7 @@ from .common import _results, _vary_spec, _with_progress
 
 def _study(args):
     from ..simulation import Simulation
-    from ..studies.study import Study
+    from ..studies.batch.study import Study
     sim = Simulation.from_file(Path(args.scenario), args.overrides, allow_code=args.allow_code)
     vary = dict(_vary_spec(text, "--vary") for text in args.vary)
     for text in args.monte_carlo:

@@ -401,7 +401,7 @@ class Plan:
             return None
         if self.objective == "track":
             raise ScenarioError("plan --objective track follows positions; a --target-direction is for time and energy")
-        from ..studies.targets import Target
+        from ..studies.inverse.targets import Target
         return Target.create(np.zeros(3), direction).direction
 
     @staticmethod
@@ -612,8 +612,8 @@ class Plan:
         ``T*`` while a whole step does not pass it, the power that lands on it, then its holding
         power ``G (T* - T_amb)``, from the TCA's own thermal step (coupling ignored). For one TCA
         that is the minimum-time plan itself, so least squares starts next to its answer."""
-        from ..studies.inverse import InverseStatics
-        from ..studies.targets import Target
+        from ..studies.inverse.statics import InverseStatics
+        from ..studies.inverse.targets import Target
         varied = [self.keys.index(self._key_of(path)) for path in self.paths]
         conductance = np.array([self.laws[j].conductance for j in varied])
         low = float(np.max(self.ambient + self.bounds[:, 0] / conductance))

@@ -1,4 +1,4 @@
-"""Plots of a calibration (:class:`~tca_casadi.studies.fit_result.FitResult`).
+"""Plots of a calibration (:class:`~tca_casadi.studies.fit.result.FitResult`).
 
 * ``fit.png``: for each measured quantity, the prediction against the measurement for every
   experiment, before (at the nominal values) and after the fit, with the line of equality

@@ -101,7 +101,7 @@ def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_point
     ``norm`` or :func:`temperature_norm`), other actuators by kind (dotted when slack); point
     masses as black dots and point forces as arrows; ``extra_points``: iterable of ``(position
     (3,) [m], label, color)`` to mark (e.g. a target), drawn on top; ``objects``:
-    :class:`~tca_casadi.studies.objects.ObjectPose` boxes; ``view``, ``projection``:
+    :class:`~tca_casadi.studies.sequence.objects.ObjectPose` boxes; ``view``, ``projection``:
     :func:`apply_view`; ``limits``: ``(low, high)`` (3,) [mm] of the box (an animation's, the
     same in every frame; default the drawing's own extent). Unbounded obstacles (planes,
     cylinders) are cut to the box.

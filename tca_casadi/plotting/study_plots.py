@@ -1,4 +1,4 @@
-"""Plots of a study (:class:`~tca_casadi.studies.study_result.StudyResult`).
+"""Plots of a study (:class:`~tca_casadi.studies.batch.result.StudyResult`).
 
 * ``study_workspace.png``: the converged tips as a 3D point cloud and in the three coordinate
   planes, coloured by a column (default the first input), each projection with its convex hull,

@@ -301,8 +301,8 @@ class TimeSimulation:
         grasp checked as in ``sequence``; carried; put down). A grasp outside the object stops
         the run there; one not across the object's long axis is a warning."""
         from ..errors import PhysicsWarning
-        from ..studies.objects import ObjectTracker
-        from ..studies.sequence import GRIP_ANGLE_TOLERANCE
+        from ..studies.sequence.objects import ObjectTracker
+        from ..studies.sequence.steps import GRIP_ANGLE_TOLERANCE
         if not self.sim.scenario.objects:
             return
         tracker = ObjectTracker(self.sim.scenario, self.sim.robot)

@@ -6,7 +6,7 @@ import yaml
 from conftest import SCENARIOS
 from tca_casadi import Simulation
 from tca_casadi.errors import ScenarioError
-from tca_casadi.studies.sequence import run_sequence, tip_yaw
+from tca_casadi.studies.sequence.steps import run_sequence, tip_yaw
 
 STEPS = ["straight", "twist", "open", "grasp", "lift", "untwist", "place"]
 BAR_MASS = 0.5e-3

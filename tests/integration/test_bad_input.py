@@ -337,7 +337,7 @@ def test_a_data_file_without_its_columns_says_which(capsys, bending, tmp_path, k
 def test_a_damaged_resume_file_is_one_line(capsys, bending, tmp_path, damage, words):
     """``study --resume`` over a rows file damaged in the middle (a write cut short at its end is
     fine: that sample is solved again)."""
-    from tca_casadi.studies.study import PARTIAL
+    from tca_casadi.studies.batch.study import PARTIAL
     args = ["study", bending, "--vary", "bending.tca2.temperature=25:125:3", "-o", str(tmp_path), "--quiet", "--no-plot"]
     plan = b'{"plan": "%s", "samples": 3}\n' % _plan_of(capsys, args, tmp_path, PARTIAL)
     first = (tmp_path / "study.csv").read_text()
@@ -351,7 +351,7 @@ def test_a_damaged_resume_file_is_one_line(capsys, bending, tmp_path, damage, wo
 def _plan_of(capsys, args, directory, partial):
     """The plan digest a study writes as its rows file's first line (from an interrupted run)."""
     import json
-    from tca_casadi.studies import study as module
+    from tca_casadi.studies.batch import study as module
     original = module._Stream.close
     module._Stream.close = lambda self: None                      # keep the rows file
     try:

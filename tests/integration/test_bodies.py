@@ -158,7 +158,7 @@ def test_physical_pick_and_place():
     reaches the arm only through them (friction), it rises with the arm and turns with it; the
     bent arm puts it down (it lands and lies flat on the table, four corners pressed), the
     gripper opens and lets go of it, and it stays where it was put when the arm rises."""
-    from tca_casadi.studies.sequence import run_sequence
+    from tca_casadi.studies.sequence.steps import run_sequence
     sim = Simulation.from_file("scenarios/arm_pick_and_place_contact.yaml")
     result = run_sequence(sim)
     assert result.converged

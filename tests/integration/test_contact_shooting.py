@@ -82,7 +82,7 @@ def test_the_physical_pick_and_place_grasp_agrees():
     this at every step: the whole sequence, lift and put-down included, agrees to 3.7e-8 m,
     docs/contact.md.)"""
     from tca_casadi.studies.compare import compare_solutions
-    from tca_casadi.studies.sequence import run_sequence
+    from tca_casadi.studies.sequence.steps import run_sequence
     sim = Simulation.from_file(SCENARIOS / "arm_pick_and_place_contact.yaml")
     steps = sim.scenario.sequence[:5]
     assert steps[-1].name == "gripper closes on the bar"

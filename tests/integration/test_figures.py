@@ -85,7 +85,7 @@ def test_a_one_input_monte_carlo_is_drawn_as_a_curve_without_roundoff_histograms
     its value instead of a histogram; the input's axis in the unit it was given in."""
     from tca_casadi.plotting.fit_plots import histogram_bins
     from tca_casadi.plotting.study_plots import plot_monte_carlo, plot_workspace
-    from tca_casadi.studies.study import Study
+    from tca_casadi.studies.batch.study import Study
     sim = Simulation.from_file(SCENARIOS / "bending_module.yaml")
     result = Study(sim, vary={"tca_types.nylon.fiber_radius": {"normal": {"mean": "0.5 mm", "std": "0.01 mm"}}},
                    samples=20, seed=1).run()

@@ -12,7 +12,7 @@ from numpy.testing import assert_allclose
 
 import tca_casadi as tc
 from tca_casadi.cli import main
-from tca_casadi.studies.fit import Fit, synthetic_measurements, write_measurements
+from tca_casadi.studies.fit.least_squares import Fit, synthetic_measurements, write_measurements
 
 ROOT = __import__("pathlib").Path(__file__).resolve().parents[2]
 E = "materials.ecoflex30.youngs_modulus"
@@ -212,7 +212,7 @@ C, G = "tca_types.nylon.thermal.heat_capacity", "tca_types.nylon.thermal.conduct
 def test_heating_curve_model_is_the_closed_form():
     """The time-series model at constants (C, G): a 0.3 W step from ambient at 1 s, off at 40 s,
     follows T_amb + P/G (1 - exp(-(t - 1) G/C)) and then decays exponentially, to 1e-6 K."""
-    from tca_casadi.studies.thermal_fit import synthetic_heating_curve
+    from tca_casadi.studies.fit.thermal import synthetic_heating_curve
     sim = tc.Simulation.from_file(HEATING)
     times = np.arange(0.0, 80.5, 2.0)
     curve = synthetic_heating_curve(sim, {C: 0.16, G: 0.0065}, ["bending.tca2.temperature"], times, 1e-30)
@@ -227,7 +227,7 @@ def test_heating_curve_recovery_and_coverage():
     """Twenty seeded heating curves (0.3 K noise): the 95 % intervals of C and G hold the truth
     at least 34 times of 40 (about 38 expected; 36 here), the fitted values' errors in units of
     their standard errors have mean within 0.5 of 0 and spread within 0.7-1.4."""
-    from tca_casadi.studies.thermal_fit import synthetic_heating_curve
+    from tca_casadi.studies.fit.thermal import synthetic_heating_curve
     sim = tc.Simulation.from_file(HEATING)
     truth = {C: 0.16, G: 0.0065}
     inside, z = 0, []
@@ -294,7 +294,7 @@ def test_a_fit_that_does_not_fit_says_so(sim):
     (0.05e-3, 0.005e-3, "more than chance allows"),  # a tenth of it
 ])
 def test_the_residual_scale_is_judged_against_chance(sim, noise, sigma, words):
-    from tca_casadi.studies.fit import synthetic_measurements
+    from tca_casadi.studies.fit.least_squares import synthetic_measurements
     truth = {E: 0.14e6}
     data = synthetic_measurements(sim, truth, _temperatures(12, 3), TIP, {"length": noise}, seed=4)
     data.sigmas[:] = sigma

@@ -99,8 +99,8 @@ def test_a_large_study_compiles_under_auto(tmp_path, monkeypatch):
     """``solver.jit: auto`` compiles a study of ``AUTO_JIT_SAMPLES`` samples or more (lowered to
     8 here): it says so, and its rows equal the uncompiled study's to 1e-10 m; ``false`` never
     compiles."""
-    from tca_casadi.studies import study as study_module
-    from tca_casadi.studies.study import Study
+    from tca_casadi.studies.batch import study as study_module
+    from tca_casadi.studies.batch.study import Study
     from tca_casadi.solvers.collocation import clear_built_solvers
     monkeypatch.setenv("TCA_CASADI_CACHE", str(tmp_path))
     monkeypatch.setattr(study_module, "AUTO_JIT_SAMPLES", 8)

@@ -254,7 +254,7 @@ def test_muscle_constants_are_parameters_no_rebuild_needed():
 def test_an_sma_wire_s_thermal_constants_fit_from_its_heating_curve():
     """Calibration sees the thermal muscles through the same interface: a noiseless heating curve
     of wire 1 (140 mA for 40 s, then cooling) at C = 6e-3 J/K, G = 9e-4 W/K gives them back."""
-    from tca_casadi.studies.thermal_fit import synthetic_heating_curve
+    from tca_casadi.studies.fit.thermal import synthetic_heating_curve
     sim = tc.Simulation.from_file("scenarios/bending_module_sma.yaml")
     truth = {"muscle_types.flexinol.thermal.heat_capacity": 6e-3, "muscle_types.flexinol.thermal.conductance": 9e-4}
     curve = synthetic_heating_curve(sim, truth, ["bending.sma1.temperature"], np.arange(0.0, 80.5, 2.0), 1e-30)
@@ -335,7 +335,7 @@ def test_random_robots_with_muscles_balance_and_both_solvers_agree(seed):
 def test_a_mckibben_muscle_s_geometry_fits_from_tip_measurements():
     """Calibration reaches a muscle's constants as NLP parameters: noiseless tip positions of the
     McKibben segment at six pressures, made at r0 = 2.2 mm and alpha0 = 22 deg, give them back."""
-    from tca_casadi.studies.fit import synthetic_measurements
+    from tca_casadi.studies.fit.least_squares import synthetic_measurements
     sim = tc.Simulation.from_file("scenarios/bending_module_mckibben.yaml")
     truth = {"muscle_types.thin.radius": 2.2e-3, "muscle_types.thin.braid_angle": math.radians(22)}
     inputs = {"segment.pam1.pressure": np.linspace(50e3, 300e3, 6)}

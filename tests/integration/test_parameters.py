@@ -7,7 +7,7 @@ from numpy.testing import assert_allclose
 
 from tca_casadi import Simulation
 from tca_casadi.errors import ScenarioError
-from tca_casadi.studies.sweep import Sweep
+from tca_casadi.studies.sweep.run import Sweep
 
 from analytic import beam_scenario, tendon_arc
 from random_robots import random_robot

@@ -29,7 +29,7 @@ def _inverse():
 
 
 def _sequence():
-    from tca_casadi.studies.sequence import run_sequence
+    from tca_casadi.studies.sequence.steps import run_sequence
     return run_sequence(tc.Simulation.from_file(BENDING))
 
 

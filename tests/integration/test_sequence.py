@@ -10,7 +10,7 @@ from conftest import SCENARIOS
 from tca_casadi import ScenarioError, Simulation
 from tca_casadi.cli import main
 from tca_casadi.studies.compare import compare_solutions
-from tca_casadi.studies.sequence import run_sequence
+from tca_casadi.studies.sequence.steps import run_sequence
 
 BENDING = SCENARIOS / "bending_module.yaml"
 CUMULATIVE = [{}, {"bending.tca1.temperature": 100},

@@ -13,7 +13,7 @@ from numpy.testing import assert_allclose
 import tca_casadi as tc
 from tca_casadi.cli import main
 from tca_casadi.errors import ScenarioError
-from tca_casadi.studies.study import PARTIAL, Study
+from tca_casadi.studies.batch.study import PARTIAL, Study
 
 TEMPERATURES = ["bending.tca1.temperature", "bending.tca2.temperature", "bending.tca3.temperature"]
 TIP = ["tip_x [m]", "tip_y [m]", "tip_z [m]"]

@@ -17,7 +17,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 import tca_casadi as tc
-from tca_casadi.studies.study import Study
+from tca_casadi.studies.batch.study import Study
 
 distributed = pytest.importorskip("distributed")
 

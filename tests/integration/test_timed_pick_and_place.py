@@ -8,8 +8,8 @@ from numpy.testing import assert_allclose
 
 from conftest import SCENARIOS
 from tca_casadi import Simulation
-from tca_casadi.studies.objects import ObjectTracker
-from tca_casadi.studies.sequence import tip_yaw
+from tca_casadi.studies.sequence.objects import ObjectTracker
+from tca_casadi.studies.sequence.steps import tip_yaw
 from tca_casadi.time_simulation.timeline import TimeSimulation
 
 TIMED = SCENARIOS / "arm_pick_and_place_timed.yaml"

@@ -60,7 +60,7 @@ def test_a_sweep_over_millimetres_is_shown_in_millimetres_with_named_events_and_
 
 
 def test_a_fit_reports_its_parameters_in_the_scenario_s_units_and_keeps_si_in_its_file(tmp_path):
-    from tca_casadi.studies.fit import Fit, synthetic_measurements
+    from tca_casadi.studies.fit.least_squares import Fit, synthetic_measurements
     sim = Simulation.from_file(SCENARIOS / "bending_module.yaml")
     data = synthetic_measurements(sim, {"tca_types.nylon.fiber_radius": 0.00052},
                                   {"bending.tca2.temperature": np.linspace(40, 110, 6)}, ["tip_x", "tip_z"],

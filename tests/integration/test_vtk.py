@@ -84,7 +84,7 @@ def test_simulate_vtk_lists_every_output_time_and_round_trips(tmp_path):
 
 def test_sequence_vtk_has_the_objects_where_the_sequence_puts_them(tmp_path):
     """The pick-and-place: a frame per step, the bar's box at its pose of that step."""
-    from tca_casadi.studies.sequence import run_sequence
+    from tca_casadi.studies.sequence.steps import run_sequence
     scenario = SCENARIOS / "arm_pick_and_place.yaml"
     result = run_sequence(Simulation.from_file(scenario))
     write_series([(float(k), s, result.objects[k]) for k, s in enumerate(result.solutions)], tmp_path, "sequence")

@@ -4,8 +4,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from tca_casadi.errors import ScenarioError
-from tca_casadi.studies.design import Axis, build_design, nearest_neighbour_order, snake_order
-from tca_casadi.studies.study_result import first_order_index
+from tca_casadi.studies.batch.design import Axis, build_design, nearest_neighbour_order, snake_order
+from tca_casadi.studies.batch.result import first_order_index
 
 
 def test_grid_is_the_full_product_in_snake_order():
@@ -100,7 +100,7 @@ def test_first_order_indices_on_a_grid_use_its_levels():
 
 def _result_with_tips(tips):
     import pandas as pd
-    from tca_casadi.studies.study_result import StudyResult
+    from tca_casadi.studies.batch.result import StudyResult
     frame = pd.DataFrame({"sample": range(len(tips)), "converged": True, "tip_x [m]": tips[:, 0],
                           "tip_y [m]": tips[:, 1], "tip_z [m]": tips[:, 2]})
     return StudyResult(frame, {}, [])

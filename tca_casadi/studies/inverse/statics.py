@@ -15,7 +15,7 @@ least total heating (``eps`` = ``regularisation``, default 1e-3), picks one answ
 reach the target; it moves a reachable answer by about ``eps e_p^2 / |dp/dtau|``, nanometres.
 
 Two methods minimise it. ``reduced`` (the default): least squares over the temperatures only,
-every iterate an equilibrium (:mod:`.inverse_reduced`). ``ipopt``: the full-space NLP with the
+every iterate an equilibrium (:mod:`.reduced`). ``ipopt``: the full-space NLP with the
 collocation constraints as equalities, exact first and second derivatives from CasADi (built on
 first use). Both are built once; the target, weights and all other parameters (loads,
 gravity, ...) are NLP parameters. The reduced method is the default because it is the faster on
@@ -30,15 +30,15 @@ import time
 import casadi as ca
 import numpy as np
 
-from ..errors import ScenarioError
-from ..model.rotations import ROTATION, rotation_angle, rotation_numpy
-from ..scenario.checks import closest
-from ..solvers.continuation import BranchFollower
-from ..buffers import BufferedFunction, CscPattern
-from ..status import SolveStatus, Status
-from .inverse_result import InverseResult, write_path_results  # noqa: F401  (re-exported)
-from .parameters import resolve_parameters, shown_as_given
-from .targets import Target, TargetLayout, read_targets  # noqa: F401  (re-exported)
+from ...errors import ScenarioError
+from ...model.rotations import ROTATION, rotation_angle, rotation_numpy
+from ...scenario.checks import closest
+from ...solvers.continuation import BranchFollower
+from ...buffers import BufferedFunction, CscPattern
+from ...status import SolveStatus, Status
+from ..parameters import resolve_parameters, shown_as_given
+from .result import InverseResult
+from .targets import Target, TargetLayout
 
 log = logging.getLogger(__name__)
 
@@ -245,7 +245,7 @@ class InverseStatics:
             if best is not None and self._reached(best):
                 break
         if tried == 0:       # no start has a forward equilibrium: try from the reference shape
-            from ..solvers.guess import reference_guess
+            from ...solvers.guess import reference_guess
             tau0 = self.middle()
             attempt = self._attempt(reference_guess(self.solver.nlp, self.params_at(tau0)), tau0, vector, target)
             iterations, tried = iterations + attempt["iterations"], 1
@@ -281,7 +281,7 @@ class InverseStatics:
         errors), ``equilibrium`` (the constraints hold) and ``result`` (:class:`SolveStatus`)."""
         started = time.perf_counter()
         if self.method == "reduced":
-            from .inverse_reduced import reduced_attempt
+            from .reduced import reduced_attempt
             w, tau, failure, iterations, detail = reduced_attempt(self, w0, tau0, vector)
             return self._describe_attempt(w, tau, "least squares (dogbox)", failure, float("nan"), iterations,
                                           detail, vector, target, started)

@@ -11,15 +11,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import PhysicsWarning, ScenarioError
-from ..results import ResultAPI, status_of
-from ..simulation import _failure_text
-from ..solvers.continuation import BranchFollower
-from .compare import compare_solutions, solve_by_shooting
-from ..model.history import carried_history
-from ..solvers.assemble import record_slides
+from ...errors import PhysicsWarning, ScenarioError
+from ...results import ResultAPI, status_of
+from ...simulation import _failure_text
+from ...solvers.continuation import BranchFollower
+from ..compare import compare_solutions, solve_by_shooting
+from ...model.history import carried_history
+from ...solvers.assemble import record_slides
 from .objects import ObjectTracker
-from .sweep_result import bending_angle
+from ..sweep.result import bending_angle
 
 #: a grasp closes "across" the object when the tip-to-tip direction is this close to 90 deg
 #: from the object's long axis [deg]
@@ -83,7 +83,7 @@ class SequenceResult(ResultAPI):
         return out
 
     def to_csv(self, path):
-        from ..output import write_csv
+        from ...output import write_csv
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         rows = self.rows()
         header = list(rows[0])
@@ -106,7 +106,7 @@ class SequenceResult(ResultAPI):
 
     def figure(self):
         """The robot at the last step (each step's PNG is ``save_step_pngs``')."""
-        from ..plotting import save_robot_png
+        from ...plotting import save_robot_png
         objects = self.objects[-1].values() if self.objects else ()
         return save_robot_png(self.solutions[-1], None, objects=objects, title=self.names[-1])
 

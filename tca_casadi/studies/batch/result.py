@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..results import ResultAPI, status_of
-from ..output import atomic_path, write_json
+from ...results import ResultAPI, status_of
+from ...output import atomic_path, write_json
 
 TIP = ["tip_x [m]", "tip_y [m]", "tip_z [m]"]
 #: the columns that come first, in this order
@@ -133,7 +133,7 @@ class StudyResult(ResultAPI):
 
     def figure(self):
         """``study_workspace.png``'s figure (the tip of every converged sample)."""
-        from ..plotting.study_plots import plot_workspace
+        from ...plotting.study_plots import plot_workspace
         return plot_workspace(self, None)
 
     def summary(self):
@@ -181,7 +181,7 @@ class StudyResult(ResultAPI):
         written.append(directory / "study.csv")
         written.append(write_json(directory / "study.json", self.to_dict()))
         if plots:
-            from ..plotting.study_plots import save_study_plots
+            from ...plotting.study_plots import save_study_plots
             written += save_study_plots(self, directory, color)
         if finish:
             self.finish()
@@ -197,7 +197,7 @@ def _pandas():
     try:
         import pandas
     except ImportError:
-        from ..errors import TcaError
+        from ...errors import TcaError
         raise TcaError("studies need pandas and pyarrow: pip install 'tca_casadi[studies]'") from None
     return pandas
 

@@ -16,8 +16,8 @@ import os
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 
-from ..errors import ScenarioError
-from .study_worker import solve_chunk
+from ...errors import ScenarioError
+from .worker import solve_chunk
 
 #: times a local pool is restarted after a worker died
 RETRIES = 3

@@ -14,10 +14,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import TcaError
-from ..model.rotations import matrix_to_quaternion
-from ..solution import BODY_COLUMNS
-from .sweep_result import bending_angle
+from ...errors import TcaError
+from ...model.rotations import matrix_to_quaternion
+from ...solution import BODY_COLUMNS
+from ..sweep.result import bending_angle
 
 #: prepared structures kept per process
 PREPARED = 4
@@ -48,7 +48,7 @@ def solve_chunk(chunk, progress=None):
     """Rows (list of dicts, one per sample, in the chunk's order) of ``chunk``; ``progress(row)``
     is called after each sample. A sample whose solve fails or raises is a row with
     ``converged`` False and the reason in ``message``, never left out."""
-    from .parameters import resolve_parameters
+    from ..parameters import resolve_parameters
     sim, base = _prepared(chunk)
     parameters = resolve_parameters(sim.robot, base, chunk.paths)
     where = f"{socket.gethostname()}:{os.getpid()}"
@@ -82,7 +82,7 @@ def _prepared(chunk):
     built once per process."""
     if chunk.key in _PREPARED:
         return _PREPARED[chunk.key]
-    from ..simulation import Simulation
+    from ...simulation import Simulation
     sim = Simulation.from_file(chunk.raw, chunk.structure, allow_code=chunk.allow_code)
     if chunk.meshes is not None:
         sim.use_meshes(chunk.meshes, chunk.degree)

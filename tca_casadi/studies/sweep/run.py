@@ -22,10 +22,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ScenarioError
-from ..solvers.continuation import ArclengthFollower, BranchFollower
-from .parameters import check_range, resolve_parameters, shown_as_given
-from .sweep_result import SweepResult, find_events
+from ...errors import ScenarioError
+from ...solvers.continuation import ArclengthFollower, BranchFollower
+from ..parameters import check_range, resolve_parameters, shown_as_given
+from .result import SweepResult, find_events
 
 log = logging.getLogger(__name__)
 

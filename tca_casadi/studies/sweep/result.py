@@ -4,11 +4,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model.rotations import matrix_to_quaternion
-from ..output import write_csv, write_json
-from ..results import ResultAPI, status_of
-from ..status import Status
-from ..text import signed
+from ...model.rotations import matrix_to_quaternion
+from ...output import write_csv, write_json
+from ...results import ResultAPI, status_of
+from ...status import Status
+from ...text import signed
 
 
 @dataclass(repr=False)
@@ -90,7 +90,7 @@ class SweepResult(ResultAPI):
         directory.mkdir(parents=True, exist_ok=True)
         written = [self.to_csv(directory / "sweep.csv"), write_json(directory / "sweep.json", self.to_dict())]
         if plots and self.points:
-            from ..plotting.sweep_plots import plot_sweep, plot_sweep_robots
+            from ...plotting.sweep_plots import plot_sweep, plot_sweep_robots
             written.append(plot_sweep(self, directory / "sweep.png"))
             written.append(plot_sweep_robots(self, directory / "sweep_robots.png", robots))
         return written
@@ -103,7 +103,7 @@ class SweepResult(ResultAPI):
 
     def figure(self):
         """``sweep.png``'s figure."""
-        from ..plotting.sweep_plots import plot_sweep
+        from ...plotting.sweep_plots import plot_sweep
         return plot_sweep(self, None)
 
     def summary(self):

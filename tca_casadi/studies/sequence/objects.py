@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ScenarioError
+from ...errors import ScenarioError
 
 #: margin [m] around an object's box within which a grasp point still counts as on the object
 GRASP_MARGIN = 0.5e-3
@@ -171,7 +171,7 @@ class ObjectTracker:
 def object_poses(scenario, robot, solution):
     """The scenario's objects as drawn with one solution: picked up where its parameters hold
     them and the grasp closes on them, else resting where the scenario puts them."""
-    from ..errors import ScenarioError
+    from ...errors import ScenarioError
     tracker = ObjectTracker(scenario, robot)
     try:
         return list(tracker.advance(solution, "solve").values())

@@ -5,7 +5,7 @@ from typing import Optional
 
 import numpy as np
 
-from ..errors import ScenarioError
+from ...errors import ScenarioError
 
 
 @dataclass
@@ -81,7 +81,7 @@ def read_targets(path, point="tip"):
     """Targets from a CSV with columns x, y, z [m] and optionally dx, dy, dz (a direction) or
     qw, qx, qy, qz (an orientation); header names may carry units (``x [m]``). Read by
     :func:`tca_casadi.tables.read_table` (one-line errors for any bad file)."""
-    from ..tables import name_of, read_table
+    from ...tables import name_of, read_table
     table = read_table(path, "inverse --path", "targets file", required=("x", "y", "z"))
     columns = {name_of(name).lower(): k for k, name in enumerate(table.header)}
     targets = []

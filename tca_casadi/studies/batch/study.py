@@ -7,7 +7,7 @@ its parameters, serially, on a pool of processes or on a Dask cluster.
     result.frame                              # pandas DataFrame, one row per sample
 
 **Plan.** The :mod:`.design` gives the samples in a locality-preserving order. Paths that are
-NLP parameters (temperatures, loads, moduli, TCA geometry: :mod:`.parameters`) only change the
+NLP parameters (temperatures, loads, moduli, TCA geometry: :mod:`~tca_casadi.studies.parameters`) only change the
 parameter vector; any other scenario path changes the structure, so the samples are grouped by
 their structural values and each group's model is built once per process. Each group's mesh is
 fixed in this process by one accuracy-controlled solve at the scenario's own values (refined
@@ -28,11 +28,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ScenarioError
+from ...errors import ScenarioError
 from .design import Axis, build_design, rows_design
 from .executors import describe, executor_of, run_dask, run_processes, run_serial
-from .parameters import check_range, resolve_parameter, shown_as_given
-from .study_worker import OUTPUTS, Chunk, failure_row, output_kind, solve_chunk
+from ..parameters import check_range, resolve_parameter, shown_as_given
+from .worker import OUTPUTS, Chunk, failure_row, output_kind, solve_chunk
 
 #: samples per chunk at most
 MAX_CHUNK = 500
@@ -55,7 +55,7 @@ class Study:
         grid), ``{"normal": {"mean": m, "std": s}}``, ``{"uniform": [lo, hi]}`` (Monte Carlo
         axes) or ``{"values": [...]}``; numbers in the path's unit or strings with units.
     outputs : list of str, optional
-        Further columns (:data:`~tca_casadi.studies.study_worker.OUTPUTS`).
+        Further columns (:data:`~tca_casadi.studies.batch.worker.OUTPUTS`).
     design : str, optional
         grid | sobol | latin | random (default grid, random with a distribution).
     samples : int, optional
@@ -102,9 +102,9 @@ class Study:
         except ScenarioError:
             pass
         raw = self._raw()
-        from ..scenario.loader import validate
-        from ..scenario.overrides import apply_overrides
-        from ..scenario.sources import SourceMap
+        from ...scenario.loader import validate
+        from ...scenario.overrides import apply_overrides
+        from ...scenario.sources import SourceMap
         try:
             validate(apply_overrides(raw, {path: _plain(probe[0]) if len(probe) else 0}), SourceMap("<study>"))
         except ScenarioError as exc:
@@ -146,7 +146,7 @@ class Study:
     def shown(self, path):
         """``(factor, unit)``: a column of ``path`` (SI) times ``factor`` is in ``unit``, the unit its
         values were given in (else the scenario's, else a readable one; temperatures in degC)."""
-        from ..units import in_unit, unit_given, unit_text, ureg
+        from ...units import in_unit, unit_given, unit_text, ureg
         parameter = self.kinds.get(path)
         if parameter is not None:
             axis = next((a for a in self.axes if a.path == path), None)
@@ -216,7 +216,7 @@ class Study:
         """Whether the workers run compiled (``solver.jit``): always with ``true``; with ``auto``
         for a study of :data:`AUTO_JIT_SAMPLES` samples or more where a C compiler is found (a
         compile of seconds, kept on disk, against about 3 ms saved per sample)."""
-        from ..solvers.compiled import has_compiler
+        from ...solvers.compiled import has_compiler
         jit = self.sim.scenario.solver.jit
         return jit is True or (jit == "auto" and self.design.size >= AUTO_JIT_SAMPLES and has_compiler())
 
@@ -225,7 +225,7 @@ class Study:
         accuracy-controlled solve at the scenario's values (None for shooting)."""
         key = json.dumps(structure, sort_keys=True)
         if key not in self._meshes:
-            from ..simulation import Simulation
+            from ...simulation import Simulation
             sim = self.sim if not structure else Simulation.from_file(self._raw(), structure,
                                                                       allow_code=self.sim.scenario._allow_code)
             if sim.method != "collocation":
@@ -247,7 +247,7 @@ class Study:
 
     # ------------------------------------------------------------------ run
     def run(self, executor=None, workers=None, scheduler=None, progress=None, directory=None, resume=False):
-        """Solve every sample; a :class:`~tca_casadi.studies.study_result.StudyResult`.
+        """Solve every sample; a :class:`~tca_casadi.studies.batch.result.StudyResult`.
 
         ``executor``: None (serial, or from ``workers`` / ``scheduler``), an int (that many
         processes), a Dask address or ``Client``. ``progress(fraction, text)`` after every
@@ -298,7 +298,7 @@ class Study:
             run_processes(todo, finished, target, lost)
         else:
             run_dask(todo, finished, target, lost)
-        from .study_result import StudyResult
+        from .result import StudyResult
         return StudyResult.from_rows(self, [rows[i] for i in sorted(rows)], {
             "ran_on": describe(kind, target), "workers": target if kind != "dask" else cluster,
             "wall_time_s": time.perf_counter() - started, "resumed_samples": resumed,
@@ -330,7 +330,7 @@ class _Stream:
         if self.path is None:
             return
         if resume and self.path.exists():
-            from ..tables import read_json_lines
+            from ...tables import read_json_lines
             records = read_json_lines(self.path, "study --resume")
             header = records[0] if records and isinstance(records[0], dict) else {}
             if header.get("plan") != digest:
@@ -382,7 +382,7 @@ def _plain(value, units=None, path=None):
     is recorded in ``units[path]``)."""
     if isinstance(value, (int, float, np.floating, np.integer)):
         return float(value)
-    from ..units import ureg
+    from ...units import ureg
     try:
         quantity = ureg.Quantity(str(value)).to_base_units()
     except Exception as exc:                       # pint's many parse errors
@@ -396,7 +396,7 @@ def _difference(study, path, value):
     """A standard deviation in the path's unit (a temperature's in kelvin = degC steps)."""
     parameter = study.kinds[path]
     if parameter is not None and parameter.kind == "temperature" and isinstance(value, str):
-        from ..units import ureg
+        from ...units import ureg
         return float(ureg.Quantity(value).to("delta_degC").magnitude)
     return study._si(path, value, "std")
 
@@ -404,7 +404,7 @@ def _difference(study, path, value):
 def read_rows(path):
     """``{PATH: values}`` from a CSV whose header names scenario paths (``[unit]`` suffixes are
     dropped: the values are in the path's unit); read by :func:`tca_casadi.tables.read_table`."""
-    from ..tables import name_of, read_table
+    from ...tables import name_of, read_table
     table = read_table(path, "study --rows", "samples file")
     return {name_of(name): table.column(k) for k, name in enumerate(table.header)}
 

@@ -13,13 +13,12 @@ collocation NLP, so there is no implicit-function derivative to take; the integr
 tolerance keeps the differences to about 1e-6).
 """
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from ..errors import ScenarioError
-from ..units import ureg
-from ..tables import name_of, unit_of
+from ...errors import ScenarioError
+from ...units import ureg
+from ...tables import name_of, unit_of
 
 #: relative step of the central differences
 STEP = 1e-5
@@ -31,7 +30,7 @@ UNITS = {"heat_capacity": "J/K", "conductance": "W/K"}
 
 def is_time_series(path):
     """True if a measurement CSV has a time column ``t`` (ScenarioError if it cannot be read)."""
-    from ..tables import name_of, read_table
+    from ...tables import name_of, read_table
     return any(name_of(text) == "t" for text in read_table(path, "fit --data", "measurements file").header)
 
 
@@ -54,7 +53,7 @@ class HeatingCurve:
 def read_heating_curve(path, robot, sigma=None):
     """A :class:`HeatingCurve` from a CSV (read by :func:`tca_casadi.tables.read_table`);
     one-line ScenarioErrors naming the column or line."""
-    from ..tables import read_table
+    from ...tables import read_table
     table = read_table(path, "fit --data", "heating curve")
     header, n = table.header, len(table.rows)
     if not n:
@@ -126,7 +125,7 @@ class ThermalParameter:
         return f"{self.path} [{self.unit}]"
 
     def to_si(self, value, what="value"):
-        from ..units import to_si
+        from ...units import to_si
         try:
             return to_si(value, "heat_capacity" if self.key == "heat_capacity" else "thermal_conductance")
         except ValueError as exc:
@@ -135,7 +134,7 @@ class ThermalParameter:
 
 def thermal_parameter(scenario, path):
     """The :class:`ThermalParameter` of ``path``; ScenarioError naming what a time-series fit takes."""
-    from ..model.laws import thermal_kinds
+    from ...model.laws import thermal_kinds
     heated = {f"tca_types.{t}" for t in scenario.tca_types} | {
         f"muscle_types.{t}" for t, config in scenario.muscle_types.items() if config.kind in thermal_kinds()}
     parts = path.split(".")
@@ -148,10 +147,10 @@ def thermal_parameter(scenario, path):
 
 class ThermalFitModel:
     """Predicted temperatures of a heating curve at thermal constants ``theta`` (same interface
-    as :class:`~tca_casadi.studies.fit.FitModel`)."""
+    as :class:`~tca_casadi.studies.fit.least_squares.FitModel`)."""
 
     def __init__(self, sim, data, parameters):
-        from ..time_simulation.timeline import TimeSimulation
+        from ...time_simulation.timeline import TimeSimulation
         self.sim, self.data, self.parameters = sim, data, parameters
         self.timed = TimeSimulation(sim, duration=max(float(data.times[-1]), 1e-9))     # built once
         keys = [a.key for a in self.timed.heated]
@@ -190,9 +189,9 @@ class ThermalFitModel:
         return out if rows is None else out[np.asarray(rows, int)]
 
     def _run(self, theta):
-        from ..solvers.thermal import integrate, steady_state
+        from ...solvers.thermal import integrate, steady_state
         if not np.all(np.asarray(theta) > 0):
-            from ..errors import TcaError
+            from ...errors import TcaError
             raise TcaError("a thermal constant reached zero")
         laws, timed = self.laws_at(theta), self.timed
         ambient = self.sim.scenario.ambient_temperature
@@ -233,7 +232,7 @@ def synthetic_heating_curve(sim, truth, names, times, noise, seed=0):
 
 
 def write_heating_curve(path, curve, comments=()):
-    from ..output import write_csv
+    from ...output import write_csv
     header = ["t [s]"] + [f"{n} [degC]" for n in curve.names] + [f"sigma_{n} [K]" for n in curve.names]
     rows = [[f"{t:.10g}"] + [f"{v:.10g}" for v in values] + [f"{s:.6g}" for s in sigma]
             for t, values, sigma in zip(curve.times, curve.values, curve.sigmas)]

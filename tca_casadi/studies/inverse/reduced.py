@@ -10,8 +10,8 @@ is an equilibrium, so the constraints hold exactly as in the full-space NLP.
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..solvers.continuation import BranchFollower
-from ..status import SolveStatus, Status
+from ...solvers.continuation import BranchFollower
+from ...status import SolveStatus, Status
 
 
 class _Equilibria:

@@ -6,9 +6,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..output import atomic_path, write_json
-from ..results import ResultAPI, status_of
-from ..status import Status
+from ...output import atomic_path, write_json
+from ...results import ResultAPI, status_of
+from ...status import Status
 
 #: Fisher information condition numbers above this are reported (parameters not told apart)
 CONDITION_LIMIT = 1e10
@@ -151,7 +151,7 @@ class FitResult(ResultAPI):
 
     def figure(self):
         """``fit.png``'s figure: measured against predicted, the residuals."""
-        from ..plotting.fit_plots import plot_fit
+        from ...plotting.fit_plots import plot_fit
         return plot_fit(self, None)
 
     def summary(self):
@@ -211,7 +211,7 @@ class FitResult(ResultAPI):
     def fitted_scenario(self):
         """The scenario's raw mapping with the fitted values written in (every fitted layout
         entry in full, SI numbers; temperatures in degC)."""
-        from ..scenario.overrides import apply_overrides
+        from ...scenario.overrides import apply_overrides
         sim = self.fit.sim
         raw = sim.scenario._raw if sim.scenario._raw is not None else sim.scenario.model_dump(mode="json")
         return apply_overrides(raw, self.fit.fitted_overrides([q.value for q in self.parameters]))
@@ -230,7 +230,7 @@ class FitResult(ResultAPI):
             temporary.write_text(header + yaml.safe_dump(self.fitted_scenario(), sort_keys=False))
         written.append(directory / "fitted.yaml")
         if plots:
-            from ..plotting.fit_plots import plot_fit, plot_fit_parameters
+            from ...plotting.fit_plots import plot_fit, plot_fit_parameters
             written += [plot_fit(self, directory / "fit.png"), plot_fit_parameters(self, directory / "fit_parameters.png")]
         return written
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ScenarioError
+from ...errors import ScenarioError
 
 DESIGNS = ("grid", "sobol", "latin", "random")
 #: values per axis of a grid when a range gives none

@@ -5,9 +5,9 @@ from typing import Optional
 
 import numpy as np
 
-from ..text import signed
-from ..results import ResultAPI
-from ..status import Status
+from ...text import signed
+from ...results import ResultAPI
+from ...status import Status
 
 #: what an iteration is, per method
 ITERATIONS = {"reduced": "least-squares iterations", "ipopt": "IPOPT iterations"}
@@ -74,7 +74,7 @@ class InverseResult(ResultAPI):
 
     def figure(self):
         """``inverse.png``'s figure: the robot, the target and the point reached."""
-        from ..plotting import save_robot_png
+        from ...plotting import save_robot_png
         state = "reached" if self.reachable else f"UNREACHABLE, {self.position_error * 1e3:.3g} mm away"
         return save_robot_png(self.forward, None, title=f"inverse statics: target {state}",
                               extra_points=[(self.target.position, "target", "magenta"), (self.position, "reached", "blue")])
@@ -84,13 +84,13 @@ class InverseResult(ResultAPI):
         ``plot``, ``inverse.png`` (the robot, the target and the reached point)."""
         from pathlib import Path
 
-        from ..output import write_json
+        from ...output import write_json
         directory = Path(directory)
         directory.mkdir(parents=True, exist_ok=True)
         path = write_json(directory / "inverse.json", self.to_dict())
         written = [path, *self.forward.save(directory)]
         if plot:
-            from ..plotting import save_robot_png
+            from ...plotting import save_robot_png
             state = "reached" if self.reachable else f"UNREACHABLE, {self.position_error * 1e3:.3g} mm away"
             written.append(save_robot_png(
                 self.forward, directory / "inverse.png", title=f"inverse statics: target {state}",
@@ -118,7 +118,7 @@ class InverseResult(ResultAPI):
 
 def write_path_results(path, results):
     """One row per target: target, temperatures, achieved position, errors, status, time."""
-    from ..output import write_csv
+    from ...output import write_csv
     temperature_names = list(results[0].temperatures)
     header = (["row", "target_x [m]", "target_y [m]", "target_z [m]"]
               + [f"{name} [{results[0].units.get(name, 'degC')}]" for name in temperature_names]

@@ -21,21 +21,20 @@ system, one sparse LU per experiment).
 p parameters) and ``s^2 = 2 cost / (n - p)``: ``Cov = s^2 (J^T J)^-1`` (``absolute_sigma``: the
 sigmas are trusted, ``s = 1``), standard errors its diagonal's roots, 95 % intervals
 ``theta +- t_{0.975, n-p} SE``, correlations ``Cov_ij / (SE_i SE_j)``. ``J^T J`` is the Fisher
-information; when its condition number exceeds :data:`~tca_casadi.studies.fit_result.CONDITION_LIMIT` the parameters with a
+information; when its condition number exceeds :data:`~tca_casadi.studies.fit.result.CONDITION_LIMIT` the parameters with a
 large share in its weakest direction cannot be told apart from the data: they are named, and
 the parameters in an exactly singular direction get no interval at all.
 """
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from ..discretisation.measurements import measurable_names, measurement_function, quantity_kind
-from ..errors import ScenarioError, TcaError
-from ..scenario.checks import closest
-from .design import nearest_neighbour_order
-from .parameters import resolve_parameter, shown_as_given
+from ...discretisation.measurements import measurable_names, measurement_function, quantity_kind
+from ...errors import ScenarioError, TcaError
+from ...scenario.checks import closest
+from ..batch.design import nearest_neighbour_order
+from ..parameters import resolve_parameter, shown_as_given
 
 #: default standard deviations of the measurements, per kind [m, N]
 DEFAULT_SIGMAS = {"length": 1e-4, "force": 1e-3}
@@ -67,7 +66,7 @@ def read_measurements(path, robot, params, sigmas=None):
     """:class:`Measurements` of a CSV (module docstring; read by :func:`tca_casadi.tables.read_table`);
     one-line ScenarioErrors naming the column or line for a column that is neither, a unit that
     does not match, a value that is not a finite number."""
-    from ..tables import read_table
+    from ...tables import read_table
     table = read_table(path, "fit --data", "measurements file")
     if not table.rows:
         raise ScenarioError(f"fit --data: {path} has no experiments (a header row and one row per experiment)")
@@ -162,7 +161,7 @@ class Fit:
 
     def __init__(self, sim, data, params, bounds=None, sigmas=None, absolute_sigma=False, starts=1,
                  holdout=None, seed=0):
-        from .thermal_fit import HeatingCurve, ThermalFitModel, is_time_series, read_heating_curve, thermal_parameter
+        from .thermal import HeatingCurve, ThermalFitModel, is_time_series, read_heating_curve, thermal_parameter
         self.sim, self._model = sim, None
         if not params:
             raise ScenarioError("fit: no parameter to fit (give --param PATH)")
@@ -262,7 +261,7 @@ class Fit:
         return self._model
 
     def run(self, progress=None):
-        """Fit; a :class:`~tca_casadi.studies.fit_result.FitResult`."""
+        """Fit; a :class:`~tca_casadi.studies.fit.result.FitResult`."""
         from scipy.optimize import least_squares
         started = time.perf_counter()
         model, train = self.model, self.train
@@ -294,7 +293,7 @@ class Fit:
         after = model.residuals(theta, train)
         J = model.jacobian(theta, train)                       # d r / d theta (r weighted)
         test = model.residuals(theta, self.test) if self.test.size else None
-        from .fit_result import FitResult
+        from .result import FitResult
         result = FitResult.build(self, theta, best, before, after, J, test, time.perf_counter() - started)
         if failed:
             result.warnings.append(f"{len(failed)} of {self.starts} starts failed (the first: {failed[0]})")
@@ -363,13 +362,13 @@ class FitModel:
     (the fitted parameters' units), each experiment's equilibrium warm-started from its last."""
 
     def __init__(self, sim, data, parameters):
-        from ..simulation import Simulation
+        from ...simulation import Simulation
         self.sim = Simulation(sim.scenario)                  # its own: the user's keeps its state
         self.sim.params = sim.params.copy()
         self.nominal = self.sim.solve(warn=False)            # fixes the mesh (accuracy control), as solve does
         self.solver = self.sim.solver()
         self.data, self.parameters = data, parameters
-        from ..buffers import BufferedFunction, CscPattern
+        from ...buffers import BufferedFunction, CscPattern
         function = measurement_function(self.solver.nlp, data.names)
         self.measure = BufferedFunction(function)
         self.patterns = (CscPattern(function.sparsity_out(1)), CscPattern(function.sparsity_out(2)))
@@ -456,7 +455,7 @@ def synthetic_measurements(sim, truth, inputs, names, noise, seed=0):
     parameter values ``truth`` (``{path: value}``) for the experiments ``inputs`` (``{path:
     values (n,)}``), plus Gaussian noise of standard deviation ``noise`` (``{kind: sigma}``,
     SI, seeded). A :class:`Measurements` whose sigmas are the noise's."""
-    from ..simulation import Simulation
+    from ...simulation import Simulation
     model_sim = Simulation(sim.scenario)
     model_sim.solve(warn=False)                  # the mesh a fit of these data uses (accuracy control)
     params = model_sim.params.copy()
@@ -485,7 +484,7 @@ def synthetic_measurements(sim, truth, inputs, names, noise, seed=0):
 def write_measurements(path, data, comments=()):
     """``data`` as a measurement CSV (inputs in their units, measurements and their sigmas in
     mm or mN), ``comments`` as ``#`` lines first."""
-    from ..output import write_csv
+    from ...output import write_csv
     header = [p.si_label for p in data.inputs]
     scale = [(1e3, "mN") if name.endswith(".tension") else (1e3, "mm") for name in data.names]
     header += [f"{name} [{unit}]" for name, (_, unit) in zip(data.names, scale)]
