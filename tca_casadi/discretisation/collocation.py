@@ -11,19 +11,33 @@ Variables ``w`` (scaled: the physical value is ``scale * w``):
        each interval (cumulative, [/L]: the compatibility equations touch only the last one, so
        every column of the Jacobian is local and it stays block-banded);
     3. the unknown tensions [/F_s] (TCAs and displacement-controlled tendons), in
-       ``robot.unknowns`` order.
+       ``robot.unknowns`` order (``tension_index``);
+    4. the normal force of each contact candidate against an obstacle [/F_s of its module], in
+       ``robot.contacts`` order (``contact_index``);
+    5. per contact against an obstacle with friction, its tangential force (3) [/F_s] and slip
+       multiplier (``friction_index``);
+    6. per grip of a free body, its normal and tangential forces (1 + 3) [/F_s] and slip
+       multiplier (``grip_index``); per free body its pose ``[delta (3) /L_o, g (3)]``
+       (``pose_index``) and, on a support, per corner its normal and tangential forces [/f_o]
+       and slip multiplier (``support_index``); ``body_index`` spans blocks 6;
+    7. a dynamic NLP (:mod:`.dynamics`) appends the velocities ``[q (3), w (3)]`` at every node
+       (``velocity_index``).
+    ``contact_block_index`` spans blocks 4-6 (:mod:`tca_casadi.model.contact_unknowns`).
 Parameters ``P``: the robot's parameter vector (``robot.layout``, declared in
     :mod:`tca_casadi.model.parameters`): gravity, base pose, material moduli and density, TCA
     geometry and fits, route placements, temperatures, tendon tensions, load forces/moments/masses.
-    The variables' scales use the scenario's values; the equations use ``P``.
+    The variables' scales use the scenario's values; the equations use ``P``. A dynamic NLP
+    appends ``c0``, the damping and the integrator's history (:mod:`tca_casadi.solvers.integrators`).
 Constraints ``g`` (equalities, each scaled to order one), per module in order:
     the base pose (first module only); the rod equations at every collocation point,
     ``[p' - R v, h' - Omega h / 2, equilibrium (6)]``; the cumulative lengths (each the one
     before plus the Gauss quadrature of ``|a|`` over the interval); at the interior breakpoints, continuity of p and h and the wrench
     jump ``K (xi+ - xi-) + point wrenches = 0``; at the module's end, the pose link to each child
     module (through its connector) and the wrench balance (the tip wrench when it has none).
-    Last, one compatibility equation per unknown tension (a TCA's law multiplied through by
-    ``G_t(F)``, a tendon's length condition; Fischer-Burmeister for ``tension_only``).
+    Then one compatibility equation per unknown tension (a TCA's law multiplied through by
+    ``G_t(F)``, a tendon's length condition; Fischer-Burmeister for ``tension_only``). Last, the
+    contact block's conditions, one per unknown of blocks 4-6 (complementarity, Coulomb's cone,
+    the free bodies' equilibria: :func:`~tca_casadi.model.contact_unknowns.contact_conditions`).
 The forward problem is square: ``len(w) == len(g)``.
 """
 import casadi as ca
