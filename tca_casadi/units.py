@@ -43,6 +43,7 @@ KINDS = {
     "voltage": ("V", "a voltage"),
     "current": ("A", "a current"),
     "time": ("s", "a time"),
+    "temperature_difference": ("K", "a temperature difference (e.g. 0.5 K)"),
     "viscosity": ("Pa*s", "a viscosity"),
     "frequency": ("Hz", "a frequency"),
     "integral_gain": ("W/(K*s)", "an integral gain (W/(K s))"),
@@ -97,6 +98,15 @@ def to_si(value, kind):
         raise ValueError(f"{shorten(value)} is out of range: |value| must be at most "
                          f"{MAX_MAGNITUDE:g} {si_unit or ''}".rstrip())
     return number
+
+
+def temperature_difference(value):
+    """A temperature difference [K] from a number or a string (``"0.5 K"``, ``"0.5 degC"``: a
+    step of one degC is one kelvin), e.g. a standard deviation of temperatures; ``ValueError``
+    as :func:`to_si`."""
+    if isinstance(value, str):
+        value = re.sub(r"(delta_degC|degC|°C)", "K", value)
+    return to_si(value, "temperature_difference")
 
 
 #: a bare number (no unit) for an angle is radians; beyond a full turn it is refused as a likely

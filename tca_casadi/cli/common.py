@@ -100,13 +100,8 @@ def _duration(seconds):
 
 def _kelvin(value):
     """A temperature difference [K] from a number or ``"0.5 K"`` (degC steps are kelvin)."""
-    if isinstance(value, float):
-        return value
-    from ..units import ureg
-    try:
-        return float(ureg.Quantity(value.replace("degC", "K")).to("K").magnitude)
-    except Exception:                       # pint's parse and dimension errors
-        raise ValueError(f"{value!r} is not a temperature difference (e.g. 0.5 K)") from None
+    from ..units import temperature_difference
+    return temperature_difference(value)
 
 
 def _vary_spec(text, option):

@@ -71,3 +71,12 @@ def test_micro_is_written_plain_where_asked_and_units_are_read_back_from_text():
     assert readable_unit("pressure", [1.2e9]) == "GPa" and readable_unit("curvature", [3.0]) == "1/m"
     np.testing.assert_allclose(in_unit(np.array([1e-3, 2e-3]), "length", "mm"), [1.0, 2.0], rtol=0, atol=1e-15)
     assert in_unit(25.0, "temperature", "K") == 25.0          # temperatures stay degC
+
+
+def test_temperature_differences_take_kelvin_and_degc_steps_alike():
+    from tca_casadi.units import temperature_difference
+    for text in ("0.5 K", "0.5 degC", "0.5 delta_degC", "500 mK"):
+        assert temperature_difference(text) == pytest.approx(0.5, rel=0, abs=1e-15)
+    assert temperature_difference(2.0) == 2.0
+    with pytest.raises(ValueError, match="'3 mm' is not a temperature difference"):
+        temperature_difference("3 mm")

@@ -396,8 +396,11 @@ def _difference(study, path, value):
     """A standard deviation in the path's unit (a temperature's in kelvin = degC steps)."""
     parameter = study.kinds[path]
     if parameter is not None and parameter.kind == "temperature" and isinstance(value, str):
-        from ...units import ureg
-        return float(ureg.Quantity(value).to("delta_degC").magnitude)
+        from ...units import temperature_difference
+        try:
+            return temperature_difference(value)
+        except ValueError as exc:
+            raise ScenarioError(f"study: {path} std {value!r}: {exc}") from None
     return study._si(path, value, "std")
 
 
