@@ -51,11 +51,17 @@ def has_compiler():
 
 def compiled(function, directory=None, sources=(), defines=(), optimised_bytes=None):
     """``function`` (a CasADi Function) as compiled code: an external Function with the same
-    inputs and outputs, loaded from the cache (compiled there first if missing). ``sources``:
-    paths of further C files compiled into the same library (e.g. :mod:`.native`'s chord
-    steps), with the preprocessor ``defines`` (``"NAME=VALUE"``); :func:`library_of` gives the
-    library's path. ``optimised_bytes``: generated code larger than this compiles without
-    optimisation (-O0)."""
+    inputs and outputs, loaded from the cache (compiled there first if missing); the arguments
+    as :func:`compiled_library`'s."""
+    library = compiled_library(function, directory, sources, defines, optimised_bytes)
+    return ca.external(function.name(), str(library))
+
+
+def compiled_library(function, directory=None, sources=(), defines=(), optimised_bytes=None):
+    """The path of the cached library of ``function``, compiled there first if missing.
+    ``sources``: paths of further C files compiled into the same library (e.g. :mod:`.native`'s
+    chord steps), with the preprocessor ``defines`` (``"NAME=VALUE"``); ``optimised_bytes``:
+    generated code larger than this compiles without optimisation (-O0)."""
     library = library_of(function, directory, sources, defines)
     if not library.exists():
         library.parent.mkdir(parents=True, exist_ok=True)
@@ -76,7 +82,7 @@ def compiled(function, directory=None, sources=(), defines=(), optimised_bytes=N
             if result.returncode != 0:
                 raise TcaError(f"solver.jit: compiling {function.name()} failed: {result.stderr.strip()[:300]}")
             os.replace(built, library)           # atomic: a concurrent process sees all or nothing
-    return ca.external(function.name(), str(library))
+    return library
 
 
 def library_of(function, directory=None, sources=(), defines=()):

@@ -16,9 +16,10 @@ compiled chord step is kept while it cuts the residual threefold (not tenfold: i
 import ctypes
 from pathlib import Path
 
+import casadi as ca
 import numpy as np
 
-from .compiled import compiled, library_of
+from .compiled import compiled_library
 
 #: the C source of the chord steps
 SOURCE = Path(__file__).with_name("chord.c")
@@ -42,10 +43,9 @@ class NativeChord:
     def __init__(self, function, directory=None):
         if function.sz_arg() > MAX_ARGUMENTS or function.sz_res() > MAX_ARGUMENTS:
             raise ValueError(f"{function.name()} needs more than {MAX_ARGUMENTS} argument slots")
-        options = dict(directory=directory, sources=(SOURCE,),
-                       defines=(f"RESIDUAL={function.name()}",))
-        self.residual = compiled(function, **options)
-        library = ctypes.CDLL(str(library_of(function, **options)))
+        path = compiled_library(function, directory, sources=(SOURCE,), defines=(f"RESIDUAL={function.name()}",))
+        self.residual = ca.external(function.name(), str(path))
+        library = ctypes.CDLL(str(path))
         self._chord = library.chord_steps
         self._chord.restype = _INT
         self._chord.argtypes = ([_INT] + [_POINTER] * 9 + [_POINTER] * 9 + [_DOUBLE, _DOUBLE, _INT, _POINTER, _POINTER])
