@@ -436,7 +436,7 @@ class TimeSimulation:
             motion = report["dynamics"]
             lines.append(f"  dynamics ({motion['integrator']}): peak tip speed {motion['peak_tip_speed'] * 1e3:.4g} mm/s, "
                          f"energy balance {motion['energy_balance_relative']:.1e} of the energy in play"
-                         + ("; residual compiled (solver.jit)" if motion["compiled_residual"] else ""))
+                         + ("; residual and Newton's chord steps compiled (solver.jit)" if motion["compiled_residual"] else ""))
             if motion["global_balance_checked"]:
                 lines.append(f"  global balance checked at {motion['global_balance_checked']} of "
                              f"{len(series.solutions)} outputs (the start, the first step, every "
