@@ -44,9 +44,12 @@ def save_timeseries_png(series, path, events=()):
     dynamic = getattr(series, "energies", None) is not None and len(series.energies)
     electrical = getattr(series, "electrical", None) or {}
     kinds = [kind for kind in ("voltage", "current") if any(k == kind for k, _ in electrical.values())]
-    panels = (["temperature"] + (["power"] if heated else []) + kinds + ["tension", "tip"]
-              + (["energy"] if dynamic else []))
-    fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.2 * len(panels) + 0.6), sharex=True)
+    has_tcas = len(series.keys) > 0
+    has_actuators = bool(n and series.solutions[0].actuators)
+    panels = ((["temperature"] if has_tcas else []) + (["power"] if heated else []) + kinds
+              + (["tension"] if has_actuators else []) + ["tip"] + (["energy"] if dynamic else []))
+    fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.2 * len(panels) + 0.6), sharex=True, squeeze=False)
+    axes = axes[:, 0]
     ax = dict(zip(panels, axes))
     for k, key in enumerate(series.keys):
         ax["temperature"].plot(t, series.temperatures[:n, k], label=key, **styles[key])

@@ -50,6 +50,17 @@ def test_a_dynamic_run_draws_its_energies_and_no_empty_power_panel():
     matplotlib.pyplot.close(figure)
 
 
+def test_a_rod_without_actuators_gets_no_empty_temperature_or_tension_panel():
+    """Till's cantilever has no TCA and no actuator: its time series shows the tip and, moving,
+    its energies only; quasi-static, the tip alone."""
+    moving, _ = _figure("analytic/steel_cantilever.yaml", ["duration=0.01"], 0.002)
+    assert [ax.get_ylabel() for ax in moving.axes] == ["tip displacement [mm]", "energy [mJ]"]
+    still, _ = _figure("analytic/steel_cantilever.yaml", ["duration=0.1", "dynamics.enabled=false"], 0.05)
+    assert [ax.get_ylabel() for ax in still.axes] == ["tip displacement [mm]"]
+    for figure in (moving, still):
+        matplotlib.pyplot.close(figure)
+
+
 def test_robot_drawing_colours_tcas_by_temperature_keeps_the_legend_outside_and_projects():
     """robot.png: each TCA's line is its temperature's colour on the colour bar's scale, the
     legend lies beside the drawing (not over it), the joints between modules are marked, and
