@@ -281,8 +281,21 @@ class BodyResult:
                 "residual_force": self.residual_force.tolist(), "residual_moment": self.residual_moment.tolist()}
 
 
+class TipOfModules:
+    """The tip of a result with ``modules`` (each with ``tip_position`` and ``tip_rotation``)
+    and the index ``tip_module`` of the tip's module."""
+
+    @property
+    def tip_position(self):
+        return self.modules[self.tip_module].tip_position
+
+    @property
+    def tip_rotation(self):
+        return self.modules[self.tip_module].tip_rotation
+
+
 @dataclass(repr=False)
-class Solution(ResultAPI):
+class Solution(TipOfModules, ResultAPI):
     """An equilibrium (or a failed attempt: ``converged`` is False, never hidden).
 
     ``result`` (:class:`~tca_casadi.status.SolveStatus`) says how the solve ended; ``converged``,
@@ -349,14 +362,6 @@ class Solution(ResultAPI):
         return [str(w) for w in self.warnings if kind is None or w.kind == kind]
 
     # ------------------------------------------------------------------ tip
-    @property
-    def tip_position(self):
-        return self.modules[self.tip_module].tip_position
-
-    @property
-    def tip_rotation(self):
-        return self.modules[self.tip_module].tip_rotation
-
     @property
     def tip_quaternion(self):
         return matrix_to_quaternion(self.tip_rotation)

@@ -103,13 +103,14 @@ def _columns(*vectors):
 
 def _point_load(load, result, value):
     i = int(np.argmin(np.abs(result.s - load.s)))
-    point, R = result.p[:, i], result.R[:, :, i]
+    point = result.p[:, i]
     if load.kind == "object":
         return point, value(f"{load.name}.held")[0] * value(f"{load.name}.mass")[0] * load.share * value("gravity"), np.zeros(3)
     if load.kind == "mass":
         return point, value(f"{load.name}.mass")[0] * value("gravity"), np.zeros(3)
     force, moment = value(f"{load.name}.force"), value(f"{load.name}.moment")
     if load.frame == "body":
+        R = result.R[:, :, i]
         force, moment = R @ force, R @ moment
     return point, force, moment
 

@@ -133,20 +133,21 @@ def animate_in_time(t, solutions, keys, temperatures, heated, stem, fps=10, max_
     (``temperatures`` (n, m) [degC] of ``keys``) of the TCAs ``heated`` (indices) that are warm;
     ``marks``: ``(position (3,) [m], label, color)`` drawn on every frame; ``view``,
     ``projection``: the camera (:func:`~tca_casadi.plotting.robot3d.apply_view`); the TCAs'
-    temperature colours on one scale for the whole run. Returns ``(paths, speed_up)``."""
+    temperature colours on one scale over every frame (only the frames' solutions are read). Returns ``(paths, speed_up)``."""
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
     t = np.asarray(t, float)
     speed_up = animation_speed_up(t[-1] - t[0], fps, max_frames)
     frames = frame_indices(t, fps, speed_up)
     ambient = float(np.nanmin(temperatures)) if len(t) and np.size(temperatures) else 0.0
-    points = [m.p for s in solutions for m in s.modules]
-    points += [pose.corners() for poses in objects for pose in poses.values()]
+    shown = [solutions[k] for k in frames]          # (a dynamic run builds only these)
+    points = [m.p for s in shown for m in s.modules]
+    points += [pose.corners() for k in frames if objects for pose in objects[k].values()]
     points += [np.asarray(position, float).reshape(3, 1) for position, _, _ in marks]
     every = np.hstack(points) * 1e3
     limits = every.min(axis=1), every.max(axis=1)
     from .robot3d import temperature_norm
-    norm = max((temperature_norm(s) for s in solutions), key=lambda n: n.vmax)
+    norm = max((temperature_norm(s) for s in shown), key=lambda n: n.vmax)
     plt = _pyplot()
     fig = plt.figure(figsize=(5.6, 5.6))
     ax = fig.add_subplot(projection="3d")
@@ -158,7 +159,7 @@ def animate_in_time(t, solutions, keys, temperatures, heated, stem, fps=10, max_
         warm = [f"{keys[j]} {temperatures[k, j]:.0f} degC" for j in heated
                 if temperatures[k, j] > ambient + 0.5][:6]          # the TCAs that are warm now
         text = "\n".join("  ".join(warm[i:i + 3]) for i in range(0, len(warm), 3))
-        draw_robot(solutions[k], ax=ax, objects=objects[k].values() if objects else (), extra_points=marks,
+        draw_robot(shown[frame], ax=ax, objects=objects[k].values() if objects else (), extra_points=marks,
                    title=f"t = {t[k]:6.1f} s   ({pace})" + (f"\n{text}" if text else ""), view=view,
                    projection=projection, norm=norm, limits=limits)
         if progress is not None:

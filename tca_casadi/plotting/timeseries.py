@@ -14,7 +14,7 @@ def actuator_styles(series):
     """``{actuator key: plot keywords}``: one colour and line style per actuator of the run (its
     index among the solution's actuators, then any other heated key), the same in every panel."""
     n = len(series.solutions)
-    keys = list(series.solutions[0].actuators) if n else []
+    keys = list(series.outputs[0].actuators) if n else []
     keys += [key for key in series.keys if key not in keys]
     return {key: dict(line_style(k, n), color=f"C{k % 10}") for k, key in enumerate(keys)}
 
@@ -45,7 +45,7 @@ def save_timeseries_png(series, path, events=()):
     electrical = getattr(series, "electrical", None) or {}
     kinds = [kind for kind in ("voltage", "current") if any(k == kind for k, _ in electrical.values())]
     has_tcas = len(series.keys) > 0
-    has_actuators = bool(n and series.solutions[0].actuators)
+    has_actuators = bool(n and series.outputs[0].actuators)
     panels = ((["temperature"] if has_tcas else []) + (["power"] if heated else []) + kinds
               + (["tension"] if has_actuators else []) + ["tip"] + (["energy"] if dynamic else []))
     fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.2 * len(panels) + 0.6), sharex=True, squeeze=False)
@@ -58,8 +58,8 @@ def save_timeseries_png(series, path, events=()):
     for key, (kind, values) in electrical.items():
         ax[kind].plot(t, values[:n] * (1e3 if kind == "current" else 1.0), label=key, drawstyle="steps-post",
                       **styles[key])
-    for key in (series.solutions[0].actuators if n else []):
-        ax["tension"].plot(t, [s.actuators[key].tension * 1e3 for s in series.solutions], label=key, **styles[key])
+    for key in (series.outputs[0].actuators if n else []):
+        ax["tension"].plot(t, [s.actuators[key].tension * 1e3 for s in series.outputs], label=key, **styles[key])
     if n:
         move = (series.tip_positions() - series.tip_positions()[0]) * 1e3
         for axis, name in enumerate("xyz"):

@@ -230,13 +230,18 @@ class CollocationSolver:
     def _outputs_at(self, w, params):
         """``(lengths, ends, base_wrenches)`` of the NLP's ``outputs`` as numpy arrays (dense
         outputs into preallocated buffers)."""
-        outputs = self.nlp.outputs
-        if any(outputs.nnz_out(k) != outputs.numel_out(k) for k in range(outputs.n_out())):
-            return tuple(np.array(v) for v in outputs(w, params))
         if getattr(self, "_buffered_outputs", None) is None:
-            self._buffered_outputs = BufferedFunction(outputs)
-        values = self._buffered_outputs(w, params)
-        return tuple(v.reshape(outputs.size_out(k), order="F").copy() for k, v in enumerate(values))
+            outputs = self.nlp.outputs
+            shapes = [outputs.size_out(k) for k in range(outputs.n_out())]
+            dense = all(outputs.nnz_out(k) == outputs.numel_out(k) for k in range(outputs.n_out()))
+            if dense and self.compiles:          # a long dynamic run reads them at every step
+                from .compiled import compiled
+                outputs = compiled(outputs.expand())
+            self._buffered_outputs = (BufferedFunction(outputs) if dense else None, shapes)
+        buffered, shapes = self._buffered_outputs
+        if buffered is None:
+            return tuple(np.array(v) for v in self.nlp.outputs(w, params))
+        return tuple(v.reshape(shape, order="F").copy() for v, shape in zip(buffered(w, params), shapes))
 
     def _node_layout(self):
         """Per module: the state indices (13, nodes) into ``w``, the nodes' arc lengths with the
@@ -256,12 +261,7 @@ class CollocationSolver:
         for m, (index, s, weights) in enumerate(self._node_layout()):
             states = np.hstack([w_phys[index], ends[:, m:m + 1]]) + nlp.state_offset[m][:, None]
             module_data.append((s, states, base[:, m], weights))
-        tensions = []
-        for actuator in self.robot.actuators:
-            if actuator.unknown_tension:
-                tensions.append(w_phys[nlp.tension_index[self.robot.unknowns.index(actuator)]])
-            else:
-                tensions.append(params[self.robot.layout[actuator.parameter]][0])
+        tensions = self._tensions(w_phys, params)
         robot_params = params[:self.robot.layout.size]
         contact = {}
         if self.robot.obstacles:       # (a contact object's support is one)
@@ -283,6 +283,13 @@ class CollocationSolver:
                               check_balance=balance,
                               extra_loads=self._extra_loads(w, params, module_data) if balance else None,
                               **contact)
+
+    def _tensions(self, w_phys, params):
+        """Every actuator's tension [N] (``robot.actuators`` order): an unknown's from the
+        physical variables ``w_phys``, a prescribed one's from ``params``."""
+        nlp, robot = self.nlp, self.robot
+        return [w_phys[nlp.tension_index[robot.unknowns.index(a)]] if a.unknown_tension
+                else params[robot.layout[a.parameter]][0] for a in robot.actuators]
 
     def clearance(self, w, params):
         """Per obstacle (placed at ``params``), the body's nearest approach ``{name: {gap [m],

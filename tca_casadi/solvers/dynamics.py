@@ -9,15 +9,18 @@ values (:mod:`.integrators`).
 The positions and orientations are not time-stepped: they follow, along s, from the base and
 the strains at each instant, as in the statics; the velocity compatibility makes ``p_t = R q``.
 """
-from dataclasses import dataclass, replace
+import functools
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..discretisation.dynamics import DynamicCollocationNLP
 from ..errors import ScenarioError
+from ..model.balance import load_markers
 from ..model.dynamics import (elastic_energy_density, inertia_per_length, inertial_loads, kinetic_energy_density,
                               point_inertia, point_mass_of)
 from ..model.rotations import rotation_numpy, rotations_of
+from ..solution import TipOfModules
 from .collocation import CollocationSolver
 from .compiled import has_compiler
 from .integrators import ImplicitEuler, integrator_named
@@ -51,6 +54,31 @@ class DynamicSolver(CollocationSolver):
         histories ((12, nodes) each)."""
         return np.concatenate([np.asarray(params, float), [c0]] + [np.asarray(b, float) for b in damping]
                               + [h.T.ravel() for h in histories])
+
+    def outputs(self, w, params):
+        """The :class:`StepOutputs` at scaled ``w`` and the step's parameter vector ``params``:
+        the centrelines, actuators and point loads of a step, without its Solution."""
+        nlp, robot = self.nlp, self.robot
+        lengths, ends, _ = self._outputs_at(w, params)
+        w_phys = np.asarray(w, float) * nlp.scale
+        modules = []
+        for m, (index, s, weights) in enumerate(self._node_layout()):
+            pose = np.hstack([w_phys[index[0:7]], ends[0:7, m:m + 1]]) + nlp.state_offset[m][0:7, None]
+            modules.append(Centreline(s, pose[0:3], pose[3:7], weights))
+        robot_params = params[:robot.layout.size]
+        tensions, lengths = self._tensions(w_phys, params), lengths.ravel()
+        references = self._reference_lengths(robot_params)
+        actuators = {a.key: ActuatorState(float(tensions[k]), float(lengths[k]), float(lengths[k]) - references[k])
+                     for k, a in enumerate(robot.actuators)}
+        return StepOutputs(np.array(robot_params, float), modules, actuators,
+                           load_markers(robot, modules, robot_params) if robot.point_loads else [], robot.tip_index)
+
+    def _reference_lengths(self, robot_params):
+        """The actuators' reference lengths [m] at ``robot_params`` (the last set kept)."""
+        key = np.asarray(robot_params, float).tobytes()
+        if getattr(self, "_references", (None,))[0] != key:
+            self._references = (key, [a.reference_length for a in self.robot.at(robot_params).actuators])
+        return self._references[1]
 
     def _extra_loads(self, w, params, module_data):
         """The sections' inertial forces and moments at the nodes (global frame, times the
@@ -126,6 +154,55 @@ class DynamicSolver(CollocationSolver):
 
 
 @dataclass
+class Centreline:
+    """A module's centreline at a step's nodes, its tip appended: arc lengths ``s`` (n,) [m],
+    positions ``p`` (3, n) [m], unit quaternions ``h`` (4, n), quadrature weights (n,) [m];
+    the rotations ``R`` (3, 3, n) computed when first read."""
+    s: np.ndarray
+    p: np.ndarray
+    h: np.ndarray
+    weights: np.ndarray
+
+    @functools.cached_property
+    def R(self):
+        return rotations_of(self.h)
+
+    @property
+    def tip_position(self):
+        return self.p[:, -1]
+
+    @property
+    def tip_rotation(self):
+        return self.R[:, :, -1] if "R" in self.__dict__ else rotation_numpy(self.h[:, -1])
+
+
+@dataclass
+class ActuatorState:
+    """An actuator's tension [N], length and stroke [m] at a step."""
+    tension: float
+    length: float
+    stroke: float
+
+
+@dataclass
+class StepOutputs(TipOfModules):
+    """What a dynamic run keeps of each step in place of its :class:`Solution` (built only when
+    asked, issue 36): the robot parameters, per module its :class:`Centreline`, per actuator
+    key its :class:`ActuatorState`, the point loads' markers (as ``Solution.loads``) and the
+    index of the tip's module. Read like a Solution by the energy account and the tables."""
+    parameters: np.ndarray
+    modules: list
+    actuators: dict
+    loads: list
+    tip_module: int
+    converged: bool = True
+
+    def contact_columns(self):
+        """No obstacles in a dynamic run: no contact columns."""
+        return {}
+
+
+@dataclass
 class StepState:
     """Node values at one instant: per module (deviation strains (6, n), velocities (6, n))
     and the scaled NLP variables ``w``."""
@@ -133,8 +210,15 @@ class StepState:
     nodes: list
     w: np.ndarray
     params: np.ndarray
-    #: the tip module's end rotation (3, 3) where the step's Solution gave it (None: from ``w``)
+    #: the tip module's end rotation (3, 3) where the step's outputs gave it (None: from ``w``)
     tip_rotation: np.ndarray = None
+    #: the step that reached it: the parameter vector it was solved at (robot parameters, c0,
+    #: damping, history), its SolveStatus, the solved variables (the midpoint rule's midpoint;
+    #: else ``w``) and the state it started from (None: the start)
+    full: np.ndarray = None
+    status: object = None
+    solved: np.ndarray = None
+    previous: "StepState" = field(default=None, repr=False)
 
 
 class RodDynamics:
@@ -182,18 +266,23 @@ class RodDynamics:
         """``(c0, history per module)`` for the next step of size ``h``: the integrator's (its
         first step's rule while there is no step before)."""
         now = self.states[-1]
-        nodes = [np.vstack(x) for x in now.nodes]
+        nodes = [np.vstack(x) for x in self.nodes_of(now)]
         if len(self.states) < 2:
             return self.integrator.first().coefficients(h, nodes)
         before = self.states[-2]
-        return self.integrator.coefficients(h, nodes, [np.vstack(x) for x in before.nodes], now.t - before.t)
+        return self.integrator.coefficients(h, nodes, [np.vstack(x) for x in self.nodes_of(before)], now.t - before.t)
 
-    def step(self, params, h, balance=True):
+    def nodes_of(self, state):
+        """A state's node values (recomputed from its ``w`` if it dropped them)."""
+        if state.nodes is None:
+            state.nodes = self.solver.node_values(state.w)
+        return state.nodes
+
+    def advance(self, params, h):
         """Advance by ``h`` [s] to the robot parameters ``params`` (at the end of the step; the
-        midpoint rule solves at the mean of the previous step's and these). Returns ``(state,
-        solution)``: the node values at the end of the step and the solved point (the end, or
-        the midpoint for ``midpoint``), or ``(None, solution)`` if Newton did not converge;
-        ``balance`` False: the solution without its global balance (``balance`` None)."""
+        midpoint rule solves at the mean of the previous step's and these). Returns the
+        :class:`StepState` at the end of the step (its Solution is built only on request:
+        :meth:`solution`), or None if Newton did not converge (``last_status`` says why)."""
         now = self.states[-1]
         c0, histories = self._coefficients(h)
         params = np.asarray(params, float)
@@ -201,21 +290,55 @@ class RodDynamics:
         solved_at = scheme.parameters_at(params, now.params)
         full = self.solver.parameters(solved_at, c0, self.damping, histories)
         guess = self._predicted(now.t + scheme.fraction * h)
-        solution = self.solver.solve_newton(full, guess, lu=self._lu, balance=balance)
+        w, status = self.solver.square.newton(guess, full, self.solver.options.tolerance, lu=self._lu)
+        self.solver.solve_count += 1
         self._lu = self.solver.square.last_lu           # chord steps of the next step start on it
-        self.last_status = solution.result
-        if not solution.converged:
-            return None, solution
-        w = solution.raw["w"]
+        self.last_status = status
+        if not status.success:
+            self._failed = (w, full)                    # for the Solution of the failed step
+            return None
+        solved = w
         if scheme.at_midpoint:
             middle = StepState(now.t + scheme.fraction * h, self.solver.node_values(w), w, solved_at)
             self._midpoints = (self._midpoints + [middle])[-2:]
             w = scheme.end(w, now.w)
-        rotation = None if scheme.at_midpoint else solution.modules[self.sim.robot.tip_index].R[:, :, -1]
-        state = StepState(now.t + h, self.solver.node_values(w), w, params, rotation)
+        state = StepState(now.t + h, self.solver.node_values(w), w, params, full=full, status=status, solved=solved,
+                          previous=now)
+        if len(self.states) == 2:          # it leaves the window: its nodes follow from w when asked
+            self.states[0].nodes = None
         self.states = (self.states + [state])[-2:]
         self._history_w = (self._history_w + [(state.t, w)])[-3:]
-        return state, solution
+        return state
+
+    def step(self, params, h, balance=True):
+        """:meth:`advance`, with the Solution of the solved point (the end, or the midpoint for
+        ``midpoint``): ``(state, solution)``, or ``(None, solution)`` where Newton did not
+        converge; ``balance`` False: the solution without its global balance."""
+        state = self.advance(params, h)
+        if state is None:
+            return None, self.solver.evaluate(*self._failed, self.last_status, balance=balance)
+        return state, self.solver.evaluate(state.solved, state.full, state.status, balance=balance)
+
+    def solution(self, state, balance=True):
+        """The :class:`Solution` of the end of the step that reached ``state`` (for the
+        midpoint rule: :meth:`end_solution`, the balance that of the solved midpoint)."""
+        solved = self.solver.evaluate(state.solved, state.full, state.status, balance=balance)
+        if not self.integrator.at_midpoint:
+            return solved
+        return self.end_solution(state, state.previous, solved)
+
+    def outputs(self, state):
+        """The :class:`StepOutputs` of the end of the step that reached ``state``."""
+        if self.integrator.at_midpoint:
+            return self.solver.outputs(state.w, self._end_parameters(state, state.previous))
+        out = self.solver.outputs(state.w, state.full)
+        state.tip_rotation = out.tip_rotation
+        return out
+
+    def solved_outputs(self, state):
+        """The :class:`StepOutputs` of the point the step was solved at (the midpoint rule's
+        midpoint; else the end)."""
+        return self.solver.outputs(state.solved, state.full)
 
     def tip_velocity(self, state):
         """The tip's global velocity [m/s] (3,) at ``state``: ``R q`` at the tip module's end."""
@@ -224,7 +347,7 @@ class RodDynamics:
         if rotation is None:
             _, ends, _ = self.solver._outputs_at(state.w, np.zeros(nlp.parameter_size))
             rotation = rotation_numpy(ends[3:7, tip])
-        last = state.nodes[tip][1][:, -(self.solver.degree + 1):]            # the last interval's nodes
+        last = self.nodes_of(state)[tip][1][:, -(self.solver.degree + 1):]            # the last interval's nodes
         q_end = last @ nlp.scheme.D
         return rotation @ q_end[0:3]
 
@@ -270,13 +393,17 @@ class RodDynamics:
         solution of the step's equations), with the step's status and the global balance of the
         solved midpoint state ``solved`` (an extrapolated state has no consistent acceleration
         to balance)."""
-        # the end's rates as implicit Euler's over the step: (x_{n+1} - x_n) / h
-        c0, histories = ImplicitEuler().coefficients(state.t - previous.t, [np.vstack(x) for x in previous.nodes])
-        full = self.solver.parameters(state.params, c0, self.damping, histories)
-        end = self.solver.evaluate(state.w, full, self.last_status, balance=False)
+        end = self.solver.evaluate(state.w, self._end_parameters(state, previous), solved.result, balance=False)
         warnings = [w for w in end.warnings if w.kind != "global_balance"] + \
                    [w for w in solved.warnings if w.kind == "global_balance"]
         return replace(end, balance=solved.balance, warnings=warnings)
+
+    def _end_parameters(self, state, previous):
+        """The parameter vector of the end ``state`` of a midpoint step from ``previous``: the
+        end's rates as implicit Euler's over the step, ``(x_{n+1} - x_n) / h``."""
+        nodes = previous.nodes if previous.nodes is not None else self.solver.node_values(previous.w)
+        c0, histories = ImplicitEuler().coefficients(state.t - previous.t, [np.vstack(x) for x in nodes])
+        return self.solver.parameters(state.params, c0, self.damping, histories)
 
     def tip_position(self, state):
         """The tip [m] (3,) at ``state`` (the end of the tip module, from the node values)."""
@@ -291,9 +418,11 @@ class RodDynamics:
         def frame(m, column):
             module = solution.modules[m]
             return module.p[:, column], module.R[:, :, column]
+        if not self._rigid_masses:
+            return 0.0, 0.0
         params = solution.parameters if params is None else np.asarray(params, float)
         full = self.solver.parameters(params, 0.0, self.damping,
-                                      [np.zeros((12, nodes[0].shape[1])) for nodes in state.nodes])
+                                      [np.zeros((12, nodes[0].shape[1])) for nodes in self.nodes_of(state)])
         gravity = params[self.sim.robot.layout["gravity"]]
         kinetic = potential = 0.0
         for mass, offset, (q, w, _, _), position, R in self.solver.rigid_points(state.w, full, frame):
@@ -302,16 +431,33 @@ class RodDynamics:
             potential -= mass * float(gravity @ (position + R @ c))
         return kinetic, potential
 
+    @property
+    def _rigid_masses(self):
+        """Whether the robot carries rigid point masses (point masses, held objects, connector
+        masses; their values may still be 0 at some parameters)."""
+        robot = self.sim.robot
+        return any(load.kind != "point" for load in robot.point_loads) or any(
+            module.connector is not None and module.connector.mass > 0 for module in robot.modules)
+
+    def sections(self, params):
+        """Per module ``(rho A [kg/m], rho J (3,) [kg m], stiffness (6,), node weights (nodes,)
+        [m])`` at the robot parameters ``params`` (the last few kept: a run's parameters change
+        only at its events)."""
+        params = np.asarray(params, float)
+        key = params.tobytes()
+        cache = self.__dict__.setdefault("_sections", {})
+        if key not in cache:
+            if len(cache) >= 8:
+                cache.pop(next(iter(cache)))
+            param, evaluated = self.sim.robot.param_function(params), self.sim.robot.at(params)
+            cache[key] = [(*inertia_per_length(module, param), evaluated.modules[m].stiffness,
+                           self.solver.nlp.node_weights(m)[:-1]) for m, module in enumerate(self.sim.robot.modules)]
+        return cache[key]
+
     def energies(self, state, params):
         """``(kinetic, elastic)`` [J] of the rods at ``state`` (Gauss quadrature on the nodes)."""
-        param = self.sim.robot.param_function(params)
         kinetic = elastic = 0.0
-        evaluated = self.sim.robot.at(params)
-        for m, (deviation, velocity) in enumerate(state.nodes):
-            module = evaluated.modules[m]
-            weights = self.solver.nlp.node_weights(m)[:-1]
-            mass, rotary = inertia_per_length(self.sim.robot.modules[m], param)
+        for (deviation, velocity), (mass, rotary, stiffness, weights) in zip(self.nodes_of(state), self.sections(params)):
             kinetic += float(kinetic_energy_density(velocity[0:3], velocity[3:6], mass, rotary) @ weights)
-            elastic += float(elastic_energy_density(module.stiffness, deviation) @ weights)
+            elastic += float(elastic_energy_density(stiffness, deviation) @ weights)
         return kinetic, elastic
-

@@ -35,10 +35,18 @@ class Integrator:
         """The integrator of a run's first step (one with no step before it)."""
         return self
 
+    def weights(self, h, h_before=None):
+        """``(c0, a, b)`` [1/s] of a step ``h`` [s] (after one ``h_before`` long, for a two-step
+        rule): ``x_t = c0 x + a x_now + b x_before``, so the history is ``a x_now + b x_before``."""
+        raise NotImplementedError
+
     def coefficients(self, h, now, before=None, h_before=None):
         """``(c0, histories)`` of a step ``h`` [s] from the node values ``now`` (per module,
         (12, nodes)) and, for a two-step rule, ``before`` (the step before, ``h_before`` long)."""
-        raise NotImplementedError
+        c0, a, b = self.weights(h, h_before)
+        if b == 0.0:
+            return c0, [a * x for x in now]
+        return c0, [a * x + b * y for x, y in zip(now, before)]
 
     def parameters_at(self, params, previous):
         """The parameter vector the step is solved at, from the step's end ``params`` and its
@@ -53,8 +61,8 @@ class Integrator:
 class ImplicitEuler(Integrator):
     name = "bdf1"
 
-    def coefficients(self, h, now, before=None, h_before=None):
-        return 1.0 / h, [-x / h for x in now]
+    def weights(self, h, h_before=None):
+        return 1.0 / h, -1.0 / h, 0.0
 
 
 class BDF2(Integrator):
@@ -63,18 +71,17 @@ class BDF2(Integrator):
     def first(self):
         return ImplicitEuler()
 
-    def coefficients(self, h, now, before=None, h_before=None):
+    def weights(self, h, h_before=None):
         r = h / h_before
-        histories = [(-(1.0 + r) * x + r ** 2 / (1.0 + r) * b) / h for x, b in zip(now, before)]
-        return (1.0 + 2.0 * r) / ((1.0 + r) * h), histories
+        return (1.0 + 2.0 * r) / ((1.0 + r) * h), -(1.0 + r) / h, r ** 2 / ((1.0 + r) * h)
 
 
 class ImplicitMidpoint(Integrator):
     name = "midpoint"
     fraction = 0.5
 
-    def coefficients(self, h, now, before=None, h_before=None):
-        return 2.0 / h, [-2.0 * x / h for x in now]
+    def weights(self, h, h_before=None):
+        return 2.0 / h, -2.0 / h, 0.0
 
     def parameters_at(self, params, previous):
         return 0.5 * (np.asarray(params, float) + np.asarray(previous, float))

@@ -33,10 +33,23 @@ class TimeSeries(ResultAPI):
     #: TCAs on voltage or current drives: {key: ("voltage" | "current", (n,) [V] or [A])} from
     #: the power and the fibre's resistance at its temperature (V = sqrt(P R(T)), I = sqrt(P / R(T)))
     electrical: dict = field(default_factory=dict)
+    #: a dynamic run's per-output StepOutputs (its Solutions are built only when asked)
+    views: list = None
+
+    @property
+    def outputs(self):
+        """Per solved output, what its tables read (tip, actuators, contact columns): the
+        Solutions, or a dynamic run's :attr:`views`."""
+        return self.solutions if self.views is None else self.views
 
     @property
     def completed(self):
-        return len(self.solutions) == len(self.t) and all(s.converged for s in self.solutions)
+        return len(self.solutions) == len(self.t) and all(s.converged for s in self.outputs)
+
+    def checked_balances(self):
+        """The global balances (relative) of the outputs whose balance was checked."""
+        built = self.solutions.checked() if hasattr(self.solutions, "checked") else self.solutions
+        return [s.balance.relative for s in built if s.balance is not None]
 
     @property
     def result(self):
@@ -51,7 +64,7 @@ class TimeSeries(ResultAPI):
         for k, key in enumerate(self.keys):
             lines.append(f"  {key:<24} temperature peak {np.nanmax(self.temperatures[:n, k]):.2f} degC")
         if n:
-            lines.append("  tip at the end [mm]: " + " ".join(f"{v * 1e3:+.4f}" for v in self.solutions[-1].tip_position))
+            lines.append("  tip at the end [mm]: " + " ".join(f"{v * 1e3:+.4f}" for v in self.outputs[-1].tip_position))
         return "\n".join(lines)
 
     def figure(self):
@@ -61,7 +74,7 @@ class TimeSeries(ResultAPI):
 
     def tip_positions(self):
         """(n, 3) [m] at the solved output times."""
-        return np.array([s.tip_position for s in self.solutions])
+        return np.array([s.tip_position for s in self.outputs]).reshape(-1, 3)
 
     def header(self):
         columns = ["t [s]"]
@@ -74,7 +87,7 @@ class TimeSeries(ResultAPI):
             columns += ["tip_vx [m/s]", "tip_vy [m/s]", "tip_vz [m/s]"] + [f"{name} [J]" for name in ENERGY_COLUMNS]
         for name in (self.objects[0] if self.objects else {}):
             columns += [f"{name}.held", f"{name}.x [m]", f"{name}.y [m]", f"{name}.z [m]"]
-        columns += list(self.solutions[0].contact_columns()) if self.solutions else []
+        columns += list(self.outputs[0].contact_columns()) if self.solutions else []
         return columns + ["converged"]
 
     def rows(self):
@@ -82,7 +95,7 @@ class TimeSeries(ResultAPI):
         tension, stroke; the voltage or current of TCAs on such drives; the tip position and quaternion; each object's held flag and centre;
         each obstacle's normal force and clearance; converged."""
         out = []
-        for k, solution in enumerate(self.solutions):
+        for k, solution in enumerate(self.outputs):
             row = [f"{self.t[k]:.10g}"]
             for j, key in enumerate(self.keys):
                 actuator = solution.actuators[key]

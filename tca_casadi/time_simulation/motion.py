@@ -17,14 +17,15 @@ trapezoidal rule, ``xi_t`` as ``(xi_{n+1} - xi_n) / h``). Their balance
 is zero up to the time discretisation (and the numerical damping of BDF2), reported per
 output as ``energy_balance``.
 """
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
 
 from ..errors import ScenarioError
 from ..model.balance import load_markers
-from ..model.dynamics import KelvinVoigt, inertia_per_length
-from ..solvers.dynamics import RodDynamics
+from ..model.dynamics import KelvinVoigt
+from ..solvers.dynamics import RodDynamics, StepState
 
 #: the range of time steps [s] the dynamics is run on (1e-7 s: the smallest at which every step
 #: converged on the cantilever; at 1e-8 s roundoff, amplified by c0 ~ 1/h, floors the residual)
@@ -68,22 +69,20 @@ class EnergyAccount:
         self._start = None
 
     def stored(self, state, solution):
-        """``(kinetic, elastic, gravitational)`` [J] at a state and its Solution, and the rigid
-        point masses' share of their sum."""
+        """``(kinetic, elastic, gravitational)`` [J] at a state and its Solution (or its
+        StepOutputs), and the rigid point masses' share of their sum."""
         robot, params = self.dynamics.sim.robot, solution.parameters
         kinetic, elastic = self.dynamics.energies(state, params)
         gravity = params[robot.layout["gravity"]]
-        param = robot.param_function(params)
         potential = 0.0
-        for m, result in enumerate(solution.modules):
-            mass, _ = inertia_per_length(robot.modules[m], param)
+        for result, (mass, *_) in zip(solution.modules, self.dynamics.sections(params)):
             potential -= float(mass * (gravity @ result.p) @ result.weights)
         rigid_kinetic, rigid_potential = self.dynamics.rigid_energies(state, solution)
         return (kinetic + rigid_kinetic, elastic, potential + rigid_potential), rigid_kinetic + rigid_potential
 
     def add(self, previous, state, solution, previous_solution, during=None):
         """Account for the step from ``previous`` to ``state`` (StepStates, with their
-        Solutions). ``during``: the Solution the step was solved at (the midpoint rule's
+        Solutions or StepOutputs). ``during``: the Solution the step was solved at (the midpoint rule's
         midpoint state), whose tensions and loads then do the work over the whole step (the
         rule's own discrete energy identity); else the trapezoidal rule on the two ends."""
         if previous is not None:
@@ -111,7 +110,7 @@ class EnergyAccount:
     def _dissipated(self, previous, state):
         h = state.t - previous.t
         total = 0.0
-        for m, ((before, _), (after, _)) in enumerate(zip(previous.nodes, state.nodes)):
+        for m, ((before, _), (after, _)) in enumerate(zip(self.dynamics.nodes_of(previous), self.dynamics.nodes_of(state))):
             change = after - before
             weights = self.dynamics.solver.nlp.node_weights(m)[:-1]
             density = np.sum(self.dynamics.damping[m][:, None] * change * change, axis=0) / h
@@ -145,6 +144,45 @@ def _rotation_between(before, after, load):
     return 0.5 * np.array([change[2, 1] - change[1, 2], change[0, 2] - change[2, 0], change[1, 0] - change[0, 1]])
 
 
+class StepSolutions(Sequence):
+    """The Solutions of a dynamic run's output times, built when asked (issue 36): a run of
+    12 500 steps keeps each step's :class:`~tca_casadi.solvers.dynamics.StepState` and builds
+    the :class:`Solution` of only those whose global balance is checked (and any a reader asks
+    for: a frame of the animation, a VTK file); :attr:`TimeSeries.views` carries the tables'
+    and the energy account's values of every step."""
+
+    def __init__(self, dynamics):
+        self.dynamics = dynamics
+        self._items = []              # a Solution (built) or a StepState (built on request)
+        self._last = (None, None)     # the last one built on request: (index, Solution)
+
+    def append(self, item):
+        """Add an output: its Solution, or the StepState that reached it."""
+        self._items.append(item)
+
+    def __len__(self):
+        return len(self._items)
+
+    def __getitem__(self, k):
+        if isinstance(k, slice):
+            return [self[i] for i in range(*k.indices(len(self)))]
+        k = range(len(self))[k]
+        item = self._items[k]
+        if not isinstance(item, StepState):
+            return item
+        if self._last[0] != k:
+            self._last = (k, self.dynamics.solution(item, balance=False))
+        return self._last[1]
+
+    def __delitem__(self, k):
+        del self._items[k]
+        self._last = (None, None)
+
+    def checked(self):
+        """The Solutions built during the run (the start and those whose balance was checked)."""
+        return [item for item in self._items if not isinstance(item, StepState)]
+
+
 def follow_dynamics(sim, series, path, progress=None, initial=None):
     """Fill ``series`` (a TimeSeries) with the motion at the parameter vectors ``path`` (one per
     output time, each step's parameters running from one to the next): the static equilibrium
@@ -152,9 +190,10 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
     time), then one implicit step per output time
     (halved up to :data:`HALVINGS` times when Newton fails: the run stops, with the solutions
     up to there, when even that fails). The global balance is checked at the first step, every
-    ``dynamics.balance_every`` steps and the last (the other steps' solutions have ``balance``
-    None). Adds ``series.tip_velocities`` (n, 3) [m/s] and ``series.energies`` (n, 7) [J]
-    (:data:`ENERGY_COLUMNS`)."""
+    ``dynamics.balance_every`` steps and the last: those steps' Solutions are built as the run
+    goes, the others' only when asked (:class:`StepSolutions`; ``series.views`` holds every
+    output's :class:`~tca_casadi.solvers.dynamics.StepOutputs`). Adds ``series.tip_velocities``
+    (n, 3) [m/s] and ``series.energies`` (n, 7) [J] (:data:`ENERGY_COLUMNS`)."""
     config = sim.scenario.dynamics
     base = sim.params.copy()
     try:
@@ -170,25 +209,28 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
     state = dynamics.start(first, series.t[0])
     state.params = np.array(path[0], float)         # the steps start from the values after any event at t0
     account = EnergyAccount(dynamics)
+    series.solutions = StepSolutions(dynamics)
     series.solutions.append(first)
+    series.views = [first]
     series.tip_velocities = [np.zeros(3)]
     account.add(None, state, first, None)
     if initial is not None:         # the first step's loads are those after any event at t0
         first = replace(first, loads=load_markers(sim.robot.at(path[0]), first.modules, path[0]))
+    view = first
     for k in range(1, len(path)):
-        previous, previous_solution = state, (first if k == 1 else series.solutions[-1])
-        checked = k == 1 or k % config.balance_every == 0 or k == len(path) - 1
-        state, solution = _advance(dynamics, path[k - 1], path[k], series.t[k] - series.t[k - 1], checked)
+        previous, previous_view = state, view
+        state = _advance(dynamics, path[k - 1], path[k], series.t[k] - series.t[k - 1])
         if state is None:
             series.message = (f"stopped at t = {series.t[k]:g} s: the step from t = {series.t[k - 1]:g} s did not "
-                              f"converge even halved {HALVINGS} times ({solution.message})")
+                              f"converge even halved {HALVINGS} times ({dynamics.last_status.message})")
             break
-        during = None
-        if dynamics.integrator.at_midpoint:
-            during, solution = solution, dynamics.end_solution(state, previous, solution)
-        series.solutions.append(solution)
+        checked = k == 1 or k % config.balance_every == 0 or k == len(path) - 1
+        series.solutions.append(dynamics.solution(state) if checked else state)
+        view = dynamics.outputs(state)
+        series.views.append(view)
         series.tip_velocities.append(dynamics.output_tip_velocity(state))
-        account.add(previous, state, solution, previous_solution, during)
+        account.add(previous, state, view, previous_view,
+                    dynamics.solved_outputs(state) if dynamics.integrator.at_midpoint else None)
         if progress is not None:
             progress((k + 1) / len(path), f"t = {series.t[k]:.4g} s")
     series.tip_velocities = np.array(series.tip_velocities)
@@ -198,21 +240,20 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
     return series
 
 
-def _advance(dynamics, start, end, h, balance=True):
+def _advance(dynamics, start, end, h):
     """From the current state (at parameters ``start``) over ``h`` to parameters ``end``: one
-    step, or 2, 4, ... equal substeps (parameters linear in between) when Newton fails.
-    ``(state, solution)``; ``state`` None if the last attempt failed; ``balance``: check the
-    last substep's global balance."""
+    step, or 2, 4, ... equal substeps (parameters linear in between) when Newton fails. The
+    StepState reached, or None if the last attempt failed (``dynamics.last_status`` says why)."""
     start, end = np.asarray(start, float), np.asarray(end, float)
     saved = dynamics.checkpoint()
     for halving in range(HALVINGS + 1):
         count = 2 ** halving
         dynamics.restore(saved)
         for j in range(1, count + 1):
-            state, solution = dynamics.step(start + (end - start) * j / count, h / count, balance and j == count)
+            state = dynamics.advance(start + (end - start) * j / count, h / count)
             if state is None:
                 break
         else:
-            return state, solution
+            return state
     dynamics.restore(saved)
-    return None, solution
+    return None

@@ -312,6 +312,8 @@ class TimeSimulation:
                 series.objects.append(tracker.advance(solution, f"t = {series.t[k]:g} s"))
             except ScenarioError as exc:
                 del series.solutions[k:]
+                if series.views is not None:
+                    del series.views[k:]
                 series.message = f"stopped at t = {series.t[k]:g} s: {str(exc).split(': ', 1)[1]}"
                 return
             for name in picked:
@@ -367,7 +369,7 @@ class TimeSimulation:
         stored = float(np.max(energies[:, 0] + energies[:, 1]) + np.max(np.abs(energies[:, 2] - energies[0, 2]))
                        + np.max(np.abs(energies[:, 3:6])))
         worst = float(np.max(np.abs(energies[:, ENERGY_COLUMNS.index("energy_balance")])))
-        checked = [s.balance.relative for s in series.solutions if s.balance is not None]
+        checked = series.checked_balances()
         return {"compiled_residual": bool(getattr(series, "compiled", False)),
                 "global_balance_checked": len(checked), "global_balance_every": config.balance_every,
                 "global_balance_worst": float(max(checked)) if checked else None,
@@ -423,7 +425,7 @@ class TimeSimulation:
             extra = (f", energy {entry['energy']:.4g} J, tau {entry['time_constant']:.3g} s" if "energy" in entry else "")
             lines.append(f"  {key:<24} {entry['drive']:<11} peak {entry['peak_temperature']:.2f} degC{extra}")
         if series.solutions:
-            tip = series.solutions[-1].tip_position * 1e3
+            tip = series.outputs[-1].tip_position * 1e3
             lines.append("  tip at the end [mm]: " + " ".join(f"{v:+.4f}" for v in tip))
         for name, entry in report["objects"].items():
             picked = ", ".join(f"{t:g}" for t in entry["picked_at"]) or ("held from the start" if entry["held_at_start"]

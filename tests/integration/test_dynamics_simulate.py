@@ -125,21 +125,51 @@ def test_a_step_that_fails_is_halved_and_a_run_that_cannot_go_on_says_why(monkey
     (halved twice), the same motion as 2.5 ms steps throughout; steps that always fail stop the
     run at the first output with the reason."""
     from tca_casadi.solvers.dynamics import RodDynamics
-    real = RodDynamics.step
+    real = RodDynamics.advance
     taken = []
 
-    def fragile(self, params, h, balance=True):
+    def fragile(self, params, h):
         taken.append(h)
-        return (None, real(self, params, h, balance)[1]) if h > 0.004 else real(self, params, h, balance)
+        state = real(self, params, h)
+        return None if h > 0.004 else state
 
     settings = [RELEASE[0].replace("midpoint", "bdf2"), "duration=0.05", RELEASE[2]]
-    monkeypatch.setattr(RodDynamics, "step", fragile)
+    monkeypatch.setattr(RodDynamics, "advance", fragile)
     halved = TimeSimulation(Simulation.from_file(CANTILEVER, settings), dt=0.01).run()
     assert halved.completed and np.unique(np.round(taken, 12)).tolist() == [0.0025, 0.005, 0.01]
-    monkeypatch.setattr(RodDynamics, "step", real)
+    monkeypatch.setattr(RodDynamics, "advance", real)
     fine = TimeSimulation(Simulation.from_file(CANTILEVER, settings), dt=0.0025).run()
     assert_allclose(halved.tip_positions(), fine.tip_positions()[::4], rtol=0, atol=1e-12)
-    monkeypatch.setattr(RodDynamics, "step", lambda self, params, h, balance=True: (None, real(self, params, h)[1]))
+    monkeypatch.setattr(RodDynamics, "advance", lambda self, params, h: real(self, params, h) and None)
     stuck = TimeSimulation(Simulation.from_file(CANTILEVER, settings), dt=0.01).run()
     assert not stuck.completed and len(stuck.solutions) == 1
     assert "did not converge even halved 6 times" in stuck.message
+
+
+@pytest.mark.parametrize("integrator", ["bdf2", "midpoint"])
+def test_solutions_are_built_only_when_asked_and_equal_those_built_at_every_step(integrator):
+    """Issue 36: a run keeps each step's state and builds the Solutions of its balance checks
+    only (the start, the first step, the last); one built later on request, and the per-step
+    values the tables and the energy account read, equal those of the same run with every
+    Solution built as it goes (``balance_every: 1``) to the last bit."""
+    damped = f"dynamics={{enabled: true, integrator: {integrator}, damping: {{ratio: 0.05, frequency: 5}}"
+    settings = ["duration=0.1", *COLD, "timeline=[{at: 0 s, set: {bending.tca2.temperature: 45}}]"]
+    lazy = TimeSimulation(Simulation.from_file(BENDING, [damped + "}"] + settings), dt=0.005).run()
+    eager = TimeSimulation(Simulation.from_file(BENDING, [damped + ", balance_every: 1}"] + settings), dt=0.005).run()
+    assert lazy.completed and eager.completed and len(lazy.solutions) == len(eager.solutions) == 21
+    assert len(lazy.solutions.checked()) == 3 and len(eager.solutions.checked()) == 21
+    assert np.array_equal(lazy.energies, eager.energies) and np.array_equal(lazy.tip_velocities, eager.tip_velocities)
+    assert lazy.rows() == eager.rows()
+    assert np.max(np.abs(lazy.energies[:, 3])) > 0                         # the TCA did work
+    for k in (2, 11, 20):
+        built, reference, view = lazy.solutions[k], eager.solutions[k], lazy.views[k]
+        assert built.balance is None if k != 20 else built.balance is not None
+        for m, module in enumerate(built.modules):
+            assert_allclose(module.p, reference.modules[m].p, rtol=0, atol=0)
+            assert_allclose(module.force, reference.modules[m].force, rtol=0, atol=0)
+            assert_allclose(view.modules[m].p, module.p, rtol=0, atol=0)
+            assert_allclose(view.modules[m].R, module.R, rtol=0, atol=1e-15)
+        for key, actuator in built.actuators.items():
+            assert actuator.tension == reference.actuators[key].tension == view.actuators[key].tension
+            assert_allclose(view.actuators[key].stroke, actuator.stroke, rtol=0, atol=1e-16)
+    assert lazy.solutions[-1].tip_position.tolist() == lazy.views[-1].tip_position.tolist()

@@ -202,13 +202,15 @@ def test_a_run_beyond_the_memory_is_refused_with_the_need(tmp_path, capsys, monk
 
 def test_a_long_run_says_how_long_it_will_take(tmp_path):
     """From its first steps, in a fresh process without a terminal: one line with the time to
-    go (the run is then interrupted)."""
+    go (the run is then interrupted; its global balance checked at every step, so that it has
+    minutes to go)."""
     import signal
     import subprocess
     import sys
     import time
     process = subprocess.Popen([sys.executable, "-m", "tca_casadi.cli", "simulate", BENDING,
-                                "--set", "dynamics={enabled: true}", "--set", "solver.jit=false", "--duration", "400",
+                                "--set", "dynamics={enabled: true, balance_every: 1}", "--set", "solver.jit=false",
+                                "--duration", "400",
                                 "--dt", "0.002", "-o", str(tmp_path), "--no-plot", "--no-animation"],
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline, line = time.monotonic() + 120, ""
