@@ -258,6 +258,7 @@ class RodDynamics:
         static_w = solution.raw["w"]
         w = np.concatenate([static_w, np.zeros(self.solver.nlp.scale.size - static_w.size)])
         self.states = [StepState(t, self.solver.node_values(w), w, np.array(solution.parameters, float))]
+        self._equilibrium = np.array(solution.parameters, float)      # where the start was solved
         self._midpoints = []
         self._history_w = [(t, w)]               # (t, w) of the last three states, for the predictor
         return self.states[-1]
@@ -290,8 +291,9 @@ class RodDynamics:
         solved_at = scheme.parameters_at(params, now.params)
         full = self.solver.parameters(solved_at, c0, self.damping, histories)
         guess = self._predicted(now.t + scheme.fraction * h)
-        w, status = self.solver.square.newton(guess, full, self.solver.options.tolerance, lu=self._lu)
-        self.solver.solve_count += 1
+        w, status = self._newton(guess, full, self._lu)
+        if not status.success:
+            w, status = self._continued(guess, self._solved_parameters(now), solved_at, c0, histories, status)
         self._lu = self.solver.square.last_lu           # chord steps of the next step start on it
         self.last_status = status
         if not status.success:
@@ -309,6 +311,38 @@ class RodDynamics:
         self.states = (self.states + [state])[-2:]
         self._history_w = (self._history_w + [(state.t, w)])[-3:]
         return state
+
+    def _newton(self, guess, full, lu=None):
+        """Newton on the step's equations at the parameter vector ``full``: ``(w, status)``."""
+        self.solver.solve_count += 1
+        return self.solver.square.newton(guess, full, self.solver.options.tolerance, lu=lu)
+
+    def _solved_parameters(self, state):
+        """The robot parameters ``state`` was solved at (the start: its static equilibrium's)."""
+        return self._equilibrium if state.full is None else state.full[:self.sim.robot.layout.size]
+
+    def _continued(self, guess, start, end, c0, histories, status, shortest=1 / 64):
+        """The step's equations at the robot parameters ``end`` by Newton along the way from
+        ``start`` (those the state it starts from was solved at): a step whose parameters jump
+        (an event at its start: a TCA stepped by 35 K) that Newton cannot take at once. Each
+        stage has the step's own ``c0`` and ``histories`` and starts from the last one's
+        solution; a stage that fails is halved down to ``shortest`` of the way. Only the last
+        stage's solution is the step's. ``(w, status)``; ``status`` (the first attempt's) when
+        the parameters did not change."""
+        if np.array_equal(start, end):
+            return guess, status
+        done, stride, w = 0.0, 0.25, guess
+        while done < 1.0:
+            trial = min(1.0, done + stride)
+            full = self.solver.parameters(start + trial * (end - start), c0, self.damping, histories)
+            reached, status = self._newton(w, full)
+            if status.success:
+                done, w, stride = trial, reached, min(2.0 * stride, 0.5)
+            elif stride / 2 < shortest:
+                return reached, status
+            else:
+                stride /= 2
+        return w, status
 
     def step(self, params, h, balance=True):
         """:meth:`advance`, with the Solution of the solved point (the end, or the midpoint for

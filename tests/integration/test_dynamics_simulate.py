@@ -12,6 +12,7 @@ from tca_casadi import Simulation
 from tca_casadi.cli import main
 from tca_casadi.time_simulation.spectrum import dominant_frequencies
 from tca_casadi.time_simulation.timeline import TimeSimulation
+from tca_casadi.status import Status
 
 CANTILEVER = str(SCENARIOS / "analytic" / "released_cantilever.yaml")
 BENDING = str(SCENARIOS / "bending_module.yaml")
@@ -173,3 +174,37 @@ def test_solutions_are_built_only_when_asked_and_equal_those_built_at_every_step
             assert actuator.tension == reference.actuators[key].tension == view.actuators[key].tension
             assert_allclose(view.actuators[key].stroke, actuator.stroke, rtol=0, atol=1e-16)
     assert lazy.solutions[-1].tip_position.tolist() == lazy.views[-1].tip_position.tolist()
+
+
+def test_an_event_newton_cannot_take_at_once_is_taken_by_continuation_within_the_step(monkeypatch):
+    """TCA 2 stepped from 25 to 60 degC at t = 0 stopped BDF2's first step (Newton from the
+    state at rest cannot take the jump, and no halving splits a jump at the step's start): the
+    step's equations are now solved along the way from the start's parameters. The run completes with its global balance; and
+    where Newton takes the jump at once (to 45 degC), forcing the way along lands on the same
+    motion to 1e-12 m."""
+    from tca_casadi.solvers.dynamics import RodDynamics
+    damped = "dynamics={enabled: true, integrator: bdf2, damping: {ratio: 0.05, frequency: 5}}"
+
+    def run(temperature):
+        settings = [damped, "duration=0.05", *COLD, f"timeline=[{{at: 0 s, set: {{bending.tca2.temperature: {temperature}}}}}]"]
+        return TimeSimulation(Simulation.from_file(BENDING, settings), dt=0.005).run()
+
+    hot = run(60)
+    assert hot.completed, hot.message
+    assert hot.checked_balances() and max(hot.checked_balances()) < 1e-8
+    tension = [out.actuators["bending.tca2"].tension for out in hot.outputs]
+    assert tension[-1] > 10 * tension[0] > 0                                 # it pulls harder
+    direct = run(45)
+    real, forced = RodDynamics._newton, []
+
+    def first_fails(self, guess, full, lu=None):
+        w, status = real(self, guess, full, lu)
+        if not forced:                          # the first step's first attempt, at the jump
+            forced.append(True)
+            return w, status.replace(status=Status.NO_DESCENT)
+        return w, status
+
+    monkeypatch.setattr(RodDynamics, "_newton", first_fails)
+    along = run(45)
+    assert forced and along.completed
+    assert_allclose(along.tip_positions(), direct.tip_positions(), rtol=0, atol=1e-12)
