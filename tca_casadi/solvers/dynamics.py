@@ -17,6 +17,7 @@ import numpy as np
 from ..discretisation.dynamics import DynamicCollocationNLP
 from ..errors import ScenarioError
 from ..model.balance import load_markers
+from ..model.contact import gaps, outline_of, outline_size
 from ..model.dynamics import (elastic_energy_density, inertia_per_length, inertial_loads, kinetic_energy_density,
                               point_inertia, point_mass_of)
 from ..model.rotations import rotation_numpy, rotations_of
@@ -70,8 +71,25 @@ class DynamicSolver(CollocationSolver):
         references = self._reference_lengths(robot_params)
         actuators = {a.key: ActuatorState(float(tensions[k]), float(lengths[k]), float(lengths[k]) - references[k])
                      for k, a in enumerate(robot.actuators)}
-        return StepOutputs(np.array(robot_params, float), modules, actuators,
-                           load_markers(robot, modules, robot_params) if robot.point_loads else [], robot.tip_index)
+        out = StepOutputs(np.array(robot_params, float), modules, actuators,
+                          load_markers(robot, modules, robot_params) if robot.point_loads else [], robot.tip_index)
+        if robot.obstacles:
+            out.contact_forces = np.asarray(w_phys[nlp.contact_index], float).ravel()
+            out.obstacles = [c.obstacle for c in robot.contacts]
+            out.contact_gaps, out.clearance = self._gaps(robot.at(robot_params).obstacles, modules)
+        return out
+
+    def _gaps(self, shapes, modules):
+        """``(gaps (contacts,) [m] at the contact candidates, {obstacle: nearest approach [m]
+        over every node})`` of the centrelines ``modules`` to the placed obstacles ``shapes``."""
+        robot = self.robot
+        per_node = {(k, m): gaps(shape, outline_of(robot.modules[m]), line.p, line.h)
+                    for k, shape in enumerate(shapes) for m, line in enumerate(modules)}
+        at_candidates = np.array([per_node[c.obstacle, c.module][int(np.argmin(np.abs(modules[c.module].s - c.s)))]
+                                  for c in robot.contacts])
+        nearest = {shape.name: float(min(per_node[k, m].min() for m in range(len(modules))))
+                   for k, shape in enumerate(shapes)}
+        return at_candidates, nearest
 
     def _reference_lengths(self, robot_params):
         """The actuators' reference lengths [m] at ``robot_params`` (the last set kept)."""
@@ -153,6 +171,28 @@ class DynamicSolver(CollocationSolver):
         return out
 
 
+#: an impact's step starts with the obstacles this far (times the section's size) from the rods
+CLEARANCE = 0.5
+#: Newton's iterations (chord steps included) on a step where a contact closes or opens
+CONTACT_ITERATIONS = 100
+
+
+def _check_contact(robot, integrator):
+    """ScenarioError for contact that rod dynamics does not model (yet): obstacles with
+    friction, objects as free bodies, obstacles with the midpoint rule (its end state, ``2 z -
+    x_n``, is extrapolated past the contact solved at the midpoint)."""
+    if robot.bodies:
+        raise ScenarioError(f"objects: {robot.bodies[0].name} is a free rigid body (it rests on a support); rod "
+                            "dynamics does not give objects inertia yet: set dynamics.enabled: false")
+    frictional = [shape.name for shape in robot.obstacles if shape.friction > 0]
+    if frictional:
+        raise ScenarioError(f"obstacles: {frictional[0]} has friction; rod dynamics models frictionless contact "
+                            f"only (yet): set obstacles.{frictional[0]}.friction: 0 or dynamics.enabled: false")
+    if robot.obstacles and integrator.at_midpoint:
+        raise ScenarioError("dynamics.integrator: midpoint with obstacles: its end state is extrapolated past the "
+                            "contact solved at the step's middle; use bdf2")
+
+
 @dataclass
 class Centreline:
     """A module's centreline at a step's nodes, its tip appended: arc lengths ``s`` (n,) [m],
@@ -196,10 +236,21 @@ class StepOutputs(TipOfModules):
     loads: list
     tip_module: int
     converged: bool = True
+    #: with obstacles: the normal force [N] and the gap [m] at each contact candidate
+    #: (``robot.contacts``), and per obstacle the nearest approach over the nodes [m]
+    contact_forces: np.ndarray = None
+    contact_gaps: np.ndarray = None
+    clearance: dict = field(default_factory=dict)
+    obstacles: list = field(default_factory=list)
 
     def contact_columns(self):
-        """No obstacles in a dynamic run: no contact columns."""
-        return {}
+        """Per obstacle ``{"NAME.normal_force [N]", "NAME.clearance [m]"}`` (as a Solution's;
+        the clearance here is the nearest node's, not searched between nodes)."""
+        out = {}
+        for k, name in enumerate(self.clearance):
+            out[f"{name}.normal_force [N]"] = float(sum(f for f, c in zip(self.contact_forces, self.obstacles) if c == k))
+            out[f"{name}.clearance [m]"] = self.clearance[name]
+        return out
 
 
 @dataclass
@@ -239,9 +290,7 @@ class RodDynamics:
 
     def __init__(self, sim, integrator="bdf2", damping=None, steps=None):
         integrator = integrator_named(integrator)
-        if sim.robot.obstacles:
-            raise ScenarioError("obstacles: rod dynamics with contact is not modelled (yet); "
-                                "set dynamics.enabled: false for quasi-static steps")
+        _check_contact(sim.robot, integrator)
         self.sim, self.integrator = sim, integrator
         static = sim.solver("collocation")
         self.solver = DynamicSolver(sim.robot, static.options, meshes=static.nlp.meshes, degree=static.degree)
@@ -294,6 +343,13 @@ class RodDynamics:
         w, status = self._newton(guess, full, self._lu)
         if not status.success:
             w, status = self._continued(guess, self._solved_parameters(now), solved_at, c0, histories, status)
+        if not status.success and self.sim.robot.obstacles:
+            # a contact closing or opening: the complementarity's kink defeats the line search
+            w, status = self._newton(guess, full, contact=True)
+            clear = None if status.success else self._clear_of_obstacles(guess, solved_at)
+            if clear is not None:           # an impact: from the obstacles moved clear back to their places
+                w, status = self._continued(guess, clear, solved_at, c0, histories, status, solve_start=True,
+                                            contact=True)
         self._lu = self.solver.square.last_lu           # chord steps of the next step start on it
         self.last_status = status
         if not status.success:
@@ -312,16 +368,20 @@ class RodDynamics:
         self._history_w = (self._history_w + [(state.t, w)])[-3:]
         return state
 
-    def _newton(self, guess, full, lu=None):
-        """Newton on the step's equations at the parameter vector ``full``: ``(w, status)``."""
+    def _newton(self, guess, full, lu=None, contact=False):
+        """Newton on the step's equations at the parameter vector ``full``: ``(w, status)``;
+        ``contact``: semismooth (full steps where the line search finds no descent) with
+        :data:`CONTACT_ITERATIONS` iterations, for a step where a contact closes or opens."""
         self.solver.solve_count += 1
-        return self.solver.square.newton(guess, full, self.solver.options.tolerance, lu=lu)
+        return self.solver.square.newton(guess, full, self.solver.options.tolerance,
+                                         CONTACT_ITERATIONS if contact else 25, lu=lu, monotone=not contact)
 
     def _solved_parameters(self, state):
         """The robot parameters ``state`` was solved at (the start: its static equilibrium's)."""
         return self._equilibrium if state.full is None else state.full[:self.sim.robot.layout.size]
 
-    def _continued(self, guess, start, end, c0, histories, status, shortest=1 / 64):
+    def _continued(self, guess, start, end, c0, histories, status, shortest=1 / 64, solve_start=False,
+                   contact=False):
         """The step's equations at the robot parameters ``end`` by Newton along the way from
         ``start`` (those the state it starts from was solved at): a step whose parameters jump
         (an event at its start: a TCA stepped by 35 K) that Newton cannot take at once. Each
@@ -332,10 +392,15 @@ class RodDynamics:
         if np.array_equal(start, end):
             return guess, status
         done, stride, w = 0.0, 0.25, guess
+        if solve_start:
+            w, status = self._newton(guess, self.solver.parameters(start, c0, self.damping, histories),
+                                     contact=contact)
+            if not status.success:
+                return w, status
         while done < 1.0:
             trial = min(1.0, done + stride)
             full = self.solver.parameters(start + trial * (end - start), c0, self.damping, histories)
-            reached, status = self._newton(w, full)
+            reached, status = self._newton(w, full, contact=contact)
             if status.success:
                 done, w, stride = trial, reached, min(2.0 * stride, 0.5)
             elif stride / 2 < shortest:
@@ -343,6 +408,29 @@ class RodDynamics:
             else:
                 stride /= 2
         return w, status
+
+    def _clear_of_obstacles(self, w, params):
+        """``params`` with every obstacle that the rods at scaled ``w`` (a predictor) cut into,
+        or come within :data:`CLEARANCE` of their section's size of, moved back along its
+        outward normal at the deepest node until they clear it by that much; None if none is
+        that near. Where an impact's step fails, the step is solved with the obstacles there
+        and continued to their places (:meth:`_continued`)."""
+        robot, nlp = self.sim.robot, self.solver.nlp
+        physical = np.asarray(w, float) * nlp.scale
+        moved, changed = np.array(params, float), False
+        for shape in robot.at(params).obstacles:
+            deepest, normal = np.inf, None
+            for m, (index, _, _) in enumerate(self.solver._node_layout()):
+                module = robot.modules[m]
+                pose = physical[index[0:7]] + nlp.state_offset[m][0:7, None]
+                g = gaps(shape, outline_of(module), pose[0:3], pose[3:7]) - CLEARANCE * outline_size(module)
+                j = int(np.argmin(g))
+                if g[j] < deepest:
+                    deepest, normal = float(g[j]), np.asarray(shape.signed_distance(pose[0:3, j])[1], float).ravel()
+            if deepest < 0:
+                moved[robot.layout[f"obstacles.{shape.name}.position"]] += deepest * normal
+                changed = True
+        return moved if changed else None
 
     def step(self, params, h, balance=True):
         """:meth:`advance`, with the Solution of the solved point (the end, or the midpoint for
@@ -362,7 +450,11 @@ class RodDynamics:
         return self.end_solution(state, state.previous, solved)
 
     def outputs(self, state):
-        """The :class:`StepOutputs` of the end of the step that reached ``state``."""
+        """The :class:`StepOutputs` of the end of the step that reached ``state`` (the start:
+        the state at rest, at its parameters)."""
+        if state.full is None:
+            return self.solver.outputs(state.w, self.solver.parameters(
+                state.params, 0.0, self.damping, [np.zeros((12, x[0].shape[1])) for x in self.nodes_of(state)]))
         if self.integrator.at_midpoint:
             return self.solver.outputs(state.w, self._end_parameters(state, state.previous))
         out = self.solver.outputs(state.w, state.full)

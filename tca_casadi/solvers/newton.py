@@ -92,7 +92,7 @@ class SquareSystem:
         """A copy of ``g(w, P)`` (n,)."""
         return self._residual(w, P)[0].copy()
 
-    def newton(self, w0, P, tolerance, max_iterations=25, lu=None):
+    def newton(self, w0, P, tolerance, max_iterations=25, lu=None, monotone=True):
         """Newton from ``w0`` until ``max |g| <= tolerance``. The factorised Jacobian is kept while
         steps contract the residual tenfold (a chord step costs one residual evaluation and two
         triangular solves; a weaker contraction means a long linear tail, so the Jacobian is
@@ -100,7 +100,10 @@ class SquareSystem:
         factorised Jacobian from a nearby point to start the chord steps with (e.g. the
         linearisation of the previous point of a path). With :attr:`native` (``solver.jit``) the
         chord steps run in compiled code (:mod:`.native`), with no Python between them, kept
-        while they cut the residual by :data:`NATIVE_CHORD_CONTRACTION`. Returns ``(w, SolveStatus)``."""
+        while they cut the residual by :data:`NATIVE_CHORD_CONTRACTION`. ``monotone`` False: where
+        no backtracked step cuts ``|g|_2``, the full step is taken all the same (semismooth Newton
+        on complementarity: a contact that closes, where the residual's kink defeats the line
+        search). Returns ``(w, SolveStatus)``."""
         started = time.perf_counter()
         w, fresh = np.array(w0, float), False
         g = self.residual(w, P)
@@ -143,7 +146,7 @@ class SquareSystem:
             except RuntimeError:
                 return ended(iteration, Status.SINGULAR)
             before = residual
-            w, g, accepted = self._line_search(w, g, lu.solve(g), P)
+            w, g, accepted = self._line_search(w, g, lu.solve(g), P, monotone=monotone)
             fresh = False
             iteration += 1
             if not accepted:
@@ -166,7 +169,7 @@ class SquareSystem:
             return 1
         return 0
 
-    def _line_search(self, w, g, step, P, shortest=1 / 64):
+    def _line_search(self, w, g, step, P, shortest=1 / 64, monotone=True):
         norm, alpha = np.linalg.norm(g), 1.0
         while alpha >= shortest:
             trial = w - alpha * step
@@ -174,6 +177,10 @@ class SquareSystem:
             if np.all(np.isfinite(g_trial)) and np.linalg.norm(g_trial) < (1 - 1e-4 * alpha) * norm:
                 return trial, g_trial, True
             alpha /= 2
+        if not monotone:                         # the full step, if its residual is a number
+            g_trial = self.residual(w - step, P)
+            if np.all(np.isfinite(g_trial)):
+                return w - step, g_trial, True
         return w, g, False
 
     # ------------------------------------------------------------------ sensitivities

@@ -10,20 +10,21 @@ the work the actuators do on the body, ``-sum_i int F_i dl_i`` (a TCA that short
 pulls does positive work), the work of the point loads ``int F . dp + M . dtheta`` (and the
 energy a point mass takes with it when it changes: an object let go), and the
 energy the rods' viscosity dissipated, ``int int xi_t . B xi_t ds dt`` (all in time by the
-trapezoidal rule, ``xi_t`` as ``(xi_{n+1} - xi_n) / h``). Their balance
+trapezoidal rule, ``xi_t`` as ``(xi_{n+1} - xi_n) / h``), and with obstacles the impact loss,
+the work the contact forces take: per step ``sum_k f_k,n+1 (g_k,n - g_k,n+1) >= 0`` (the
+implicit step's contact force acts at its end; ``docs/contact.md`` section 5a). Their balance
 
-    (kinetic + elastic + gravitational)(t) - (...)(0) + dissipated - actuator work - load work
+    (kinetic + elastic + gravitational)(t) - (...)(0) + dissipated + impact loss
+        - actuator work - load work
 
-is zero up to the time discretisation (and the numerical damping of BDF2), reported per
-output as ``energy_balance``.
+is zero up to the time discretisation (and the numerical damping of BDF2, which at an impact
+holds the rest of the inelastic loss), reported per output as ``energy_balance``.
 """
 from collections.abc import Sequence
-from dataclasses import replace
 
 import numpy as np
 
 from ..errors import ScenarioError
-from ..model.balance import load_markers
 from ..model.dynamics import KelvinVoigt
 from ..solvers.dynamics import RodDynamics, StepState
 
@@ -33,7 +34,7 @@ STEP_RANGE = (1e-7, 0.1)
 #: a step that does not converge is halved at most this many times
 HALVINGS = 6
 ENERGY_COLUMNS = ("kinetic_energy", "elastic_energy", "gravitational_energy", "actuator_work", "load_work",
-                  "dissipated_energy", "energy_balance")
+                  "dissipated_energy", "impact_loss", "energy_balance")
 
 
 def damping_of(config, scenario):
@@ -65,7 +66,7 @@ class EnergyAccount:
     def __init__(self, dynamics):
         self.dynamics = dynamics
         self.rows = []
-        self._work = {"actuator_work": 0.0, "load_work": 0.0, "dissipated_energy": 0.0}
+        self._work = {"actuator_work": 0.0, "load_work": 0.0, "dissipated_energy": 0.0, "impact_loss": 0.0}
         self._start = None
 
     def stored(self, state, solution):
@@ -95,6 +96,10 @@ class EnergyAccount:
                                                for k, a in solution.actuators.items())
             self._work["load_work"] += _load_work(robot, previous_solution, solution, during)
             self._work["dissipated_energy"] += self._dissipated(previous, state)
+            if getattr(solution, "contact_forces", None) is not None:
+                # the step's contact impulse acts at its end: sum f_{n+1} (g_n - g_{n+1}), = sum f_{n+1} g_n
+                self._work["impact_loss"] += float(solution.contact_forces @ (previous_solution.contact_gaps
+                                                                                - solution.contact_gaps))
         stored, rigid = self.stored(state, solution)
         if previous is not None and not np.array_equal(solution.parameters, previous_solution.parameters):
             # a point mass that changed (an object let go or taken) takes or brings its energy
@@ -102,10 +107,10 @@ class EnergyAccount:
             self._work["load_work"] += rigid - sum(kept)
         if self._start is None:
             self._start = sum(stored)
-        balance = (sum(stored) - self._start + self._work["dissipated_energy"] - self._work["actuator_work"]
-                   - self._work["load_work"])
+        balance = (sum(stored) - self._start + self._work["dissipated_energy"] + self._work["impact_loss"]
+                   - self._work["actuator_work"] - self._work["load_work"])
         self.rows.append((*stored, self._work["actuator_work"], self._work["load_work"],
-                          self._work["dissipated_energy"], balance))
+                          self._work["dissipated_energy"], self._work["impact_loss"], balance))
 
     def _dissipated(self, previous, state):
         h = state.t - previous.t
@@ -211,12 +216,10 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
     account = EnergyAccount(dynamics)
     series.solutions = StepSolutions(dynamics)
     series.solutions.append(first)
-    series.views = [first]
+    view = dynamics.outputs(state)  # at the parameters after any event at t0 (the first step's loads)
+    series.views = [view]
     series.tip_velocities = [np.zeros(3)]
-    account.add(None, state, first, None)
-    if initial is not None:         # the first step's loads are those after any event at t0
-        first = replace(first, loads=load_markers(sim.robot.at(path[0]), first.modules, path[0]))
-    view = first
+    account.add(None, state, view, None)
     for k in range(1, len(path)):
         previous, previous_view = state, view
         state = _advance(dynamics, path[k - 1], path[k], series.t[k] - series.t[k - 1])

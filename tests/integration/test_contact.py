@@ -225,13 +225,20 @@ def test_bad_boxes_and_contact_points_are_errors():
         Simulation.from_file(pushed({"at": {"rod": ["200 mm"]}}))
 
 
-def test_dynamics_refuses_contact_with_a_clear_message():
+def test_dynamics_from_an_equilibrium_in_contact_stays_there():
+    """The rod pushed into the ball, as rod dynamics (issue 33): started at its static
+    equilibrium, with nothing changing, it stays there (to 1e-12 m, at rest) with the same
+    contact force."""
     scenario = pushed()
     scenario["materials"]["m"]["density"] = 1100
-    sim = Simulation.from_file(dict(scenario, dynamics={"enabled": True}, duration=0.01))
+    sim = Simulation.from_file(dict(scenario, dynamics={"enabled": True}, duration=0.05))
     from tca_casadi.time_simulation.timeline import TimeSimulation
-    with pytest.raises(ScenarioError, match="rod dynamics with contact is not modelled"):
-        TimeSimulation(sim, dt=0.005).run()
+    series = TimeSimulation(sim, dt=0.005).run()
+    assert series.completed, series.message
+    force = [view.contact_columns()["ball.normal_force [N]"] for view in series.views]
+    assert force[0] > 0 and np.ptp(force) < 1e-9 * force[0]
+    assert np.max(np.abs(series.tip_positions() - series.tip_positions()[0])) < 1e-12
+    assert np.max(np.abs(series.tip_velocities)) < 1e-9
 
 
 def test_cli_exits_2_on_an_intersecting_obstacle(tmp_path):

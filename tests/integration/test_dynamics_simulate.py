@@ -197,8 +197,8 @@ def test_an_event_newton_cannot_take_at_once_is_taken_by_continuation_within_the
     direct = run(45)
     real, forced = RodDynamics._newton, []
 
-    def first_fails(self, guess, full, lu=None):
-        w, status = real(self, guess, full, lu)
+    def first_fails(self, guess, full, lu=None, contact=False):
+        w, status = real(self, guess, full, lu, contact)
         if not forced:                          # the first step's first attempt, at the jump
             forced.append(True)
             return w, status.replace(status=Status.NO_DESCENT)
