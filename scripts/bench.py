@@ -212,9 +212,10 @@ DYNAMIC_PROBLEMS = {"bending module": ("bending_module", ["bending.tca2.temperat
 
 def dynamics_rate(name, dt, steps, jit=False):
     """Real-time factor (simulated seconds per wall second) of BDF2 dynamics: the median step time
-    (Newton and the step's Solution with its global balance) over ``steps`` steps of ``dt`` after
-    a TCA's temperature steps by 10 degC (the static start, the dynamic NLP's build and any
-    compile not timed); ``jit``: with ``solver.jit``."""
+    (what ``simulate`` does per step: Newton and the step's outputs; the Solutions with their
+    global balance are built every ``dynamics.balance_every`` steps only) over ``steps`` steps of
+    ``dt`` after a TCA's temperature steps by 10 degC (the static start, the dynamic NLP's build
+    and any compile not timed); ``jit``: with ``solver.jit``."""
     from tca_casadi.solvers.dynamics import RodDynamics
     scenario, overrides = DYNAMIC_PROBLEMS[name]
     sim = Simulation.from_file(SCENARIOS / f"{scenario}.yaml", overrides + [f"solver.jit={str(jit).lower()}"])
@@ -228,14 +229,37 @@ def dynamics_rate(name, dt, steps, jit=False):
     times, iterations = [], []
     for _ in range(steps):
         started = time.perf_counter()
-        state, solution = dynamics.step(params, dt)
-        times.append(time.perf_counter() - started)
-        iterations.append(solution.result.nit)
+        state = dynamics.advance(params, dt)
         if state is None:
-            return {"dt_s": dt, "step_s": None, "real_time_factor": None, "message": solution.message}
+            return {"dt_s": dt, "step_s": None, "real_time_factor": None, "message": dynamics.last_status.message}
+        dynamics.outputs(state)
+        times.append(time.perf_counter() - started)
+        iterations.append(state.status.nit)
     step = float(np.median(times))
     return {"dt_s": dt, "jit": jit, "step_s": step, "real_time_factor": dt / step,
             "newton_iterations": float(np.median(iterations)), "unknowns": int(dynamics.solver.nlp.scale.size)}
+
+
+#: the bending module pressing on a wall (issue 33): TCA 2 and 3 at 100 degC bend it into a wall
+#: 12 mm from its axis; its dynamics starts there
+WALL = ["bending.tca2.temperature=100", "bending.tca3.temperature=100",
+        "obstacles=[{name: wall, shape: plane, position: [-12 mm, 0, 0], normal: [1, 0, 0]}]"]
+
+
+def wall_pressing(steps=50, dt=0.002):
+    """Issue 33's contact benchmark: BDF2 at ``dt`` of the bending module pressed on a wall
+    (:data:`WALL`, a +10 degC step on TCA 2 from its static equilibrium there) against the same
+    run without the wall: both real-time factors (:func:`dynamics_rate`'s median step) and their
+    ratio (the goal: at least 0.5)."""
+    DYNAMIC_PROBLEMS["bending module on a wall"] = ("bending_module", WALL)
+    DYNAMIC_PROBLEMS["bending module, no wall"] = ("bending_module", WALL[:2])
+    try:
+        wall, free = (dynamics_rate(name, dt, steps) for name in ("bending module on a wall", "bending module, no wall"))
+    finally:
+        del DYNAMIC_PROBLEMS["bending module on a wall"], DYNAMIC_PROBLEMS["bending module, no wall"]
+    ratio = (wall["real_time_factor"] / free["real_time_factor"]
+             if wall["real_time_factor"] and free["real_time_factor"] else None)
+    return {"wall": wall, "no_wall": free, "ratio": ratio}
 
 
 def first_mode(t, x):

@@ -118,7 +118,7 @@ def arm_inverse():
 def targets(quick=False):
     """Every target's row (module docstring); ``quick``: the cheap ones, 0.5 s of Till's rod."""
     sys.path.insert(0, str(Path(__file__).parent))
-    from bench import dynamics_rate, study_rates, till_cantilever
+    from bench import dynamics_rate, study_rates, till_cantilever, wall_pressing
     rows = []
     warm = warm_solve(5 if quick else 50)
     rows.append(row("bending module: warm solve after +1 degC, from the previous point's factors (solver.jit)",
@@ -140,6 +140,12 @@ def targets(quick=False):
         rows.append(row(f"{name}: BDF2 dynamics at dt 2 ms (solver.jit)", rate["real_time_factor"], goal,
                         "x real time", (rate["real_time_factor"] or 0) >= goal,
                         f"{rate['step_s'] * 1e3:.2f} ms per step" if rate["step_s"] else rate.get("message", "")))
+    wall = wall_pressing(5 if quick else 50)
+    rows.append(row("bending module pressing on a wall (issue 33): BDF2 at dt 2 ms, real-time factor against "
+                    "the same run without the wall", wall["ratio"], 0.5, "ratio", (wall["ratio"] or 0) >= 0.5,
+                    f"{wall['wall']['step_s'] * 1e3:.2f} ms per step on the wall ({wall['wall']['unknowns']} unknowns), "
+                    f"{wall['no_wall']['step_s'] * 1e3:.2f} ms without ({wall['no_wall']['unknowns']})"
+                    if wall["ratio"] else "a run failed"))
     if not quick:
         robot = random_robot()
         rows.append(row("random 4-module robot (robot_11_9): tca-casadi solve, whole call", robot["wall_s"], 10.0, "s",

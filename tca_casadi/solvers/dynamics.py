@@ -342,7 +342,8 @@ class RodDynamics:
         guess = self._predicted(now.t + scheme.fraction * h)
         w, status = self._newton(guess, full, self._lu)
         if not status.success:
-            w, status = self._continued(guess, self._solved_parameters(now), solved_at, c0, histories, status)
+            w, status = self._continued(guess, self._solved_parameters(now), solved_at, c0, histories, status,
+                                        contact=bool(self.sim.robot.obstacles))
         if not status.success and self.sim.robot.obstacles:
             # a contact closing or opening: the complementarity's kink defeats the line search
             w, status = self._newton(guess, full, contact=True)

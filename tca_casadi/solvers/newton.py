@@ -33,6 +33,9 @@ ROUNDOFF_FACTOR = 2
 #: fresh Jacobian every 12 steps instead of every 6, 30 % less time); 14 steps at most from
 #: 1e-3 to 1e-10, well inside the iteration budget
 NATIVE_CHORD_CONTRACTION = 0.3
+#: a semismooth Newton step taken without descent is at most this long in the scaled variables
+#: (each of order one: positions in module lengths, forces in force scales)
+SEMISMOOTH_STEP = 0.05
 
 
 def roundoff_floor(J, w):
@@ -101,9 +104,10 @@ class SquareSystem:
         linearisation of the previous point of a path). With :attr:`native` (``solver.jit``) the
         chord steps run in compiled code (:mod:`.native`), with no Python between them, kept
         while they cut the residual by :data:`NATIVE_CHORD_CONTRACTION`. ``monotone`` False: where
-        no backtracked step cuts ``|g|_2``, the full step is taken all the same (semismooth Newton
-        on complementarity: a contact that closes, where the residual's kink defeats the line
-        search). Returns ``(w, SolveStatus)``."""
+        no backtracked step cuts ``|g|_2``, the step is taken all the same, capped at
+        :data:`SEMISMOOTH_STEP` in the scaled variables (semismooth Newton on complementarity: a
+        contact that closes, where the residual's kink defeats the line search; the cap keeps it
+        from roots far away). Returns ``(w, SolveStatus)``."""
         started = time.perf_counter()
         w, fresh = np.array(w0, float), False
         g = self.residual(w, P)
@@ -177,10 +181,12 @@ class SquareSystem:
             if np.all(np.isfinite(g_trial)) and np.linalg.norm(g_trial) < (1 - 1e-4 * alpha) * norm:
                 return trial, g_trial, True
             alpha /= 2
-        if not monotone:                         # the full step, if its residual is a number
-            g_trial = self.residual(w - step, P)
+        if not monotone:                         # the step, capped, if its residual is a number
+            longest = float(np.max(np.abs(step))) if step.size else 0.0
+            trial = w - step * min(1.0, SEMISMOOTH_STEP / longest) if longest > 0 else w
+            g_trial = self.residual(trial, P)
             if np.all(np.isfinite(g_trial)):
-                return w - step, g_trial, True
+                return trial, g_trial, True
         return w, g, False
 
     # ------------------------------------------------------------------ sensitivities

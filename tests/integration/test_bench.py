@@ -59,3 +59,12 @@ def test_control_quick(tmp_path, capsys):
     assert result["plan bending module"]["converged"] and result["plan bending module"]["reached_at_s"] is not None
     assert result["mpc bending module"]["periods"] == 10 and result["mpc bending module"]["solve_time_median_s"] > 0
     assert "controller solve median" in capsys.readouterr().out and (tmp_path / "bench_control.json").exists()
+
+
+def test_wall_pressing_quick():
+    """Issue 33's contact benchmark runs: the bending module pressed on a wall and the same run
+    without it both step (the wall adds the contact unknowns), with a ratio of their rates."""
+    from bench import wall_pressing
+    result = wall_pressing(steps=3)
+    assert result["wall"]["unknowns"] > result["no_wall"]["unknowns"]
+    assert result["ratio"] is not None and result["ratio"] > 0
