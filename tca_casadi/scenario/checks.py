@@ -2,7 +2,7 @@
 inside their module. Each failure is one line naming file, line and key path."""
 from ..errors import ScenarioError
 from .schema import Scenario
-from .sources import did_you_mean, format_path
+from .sources import did_you_mean, located
 
 #: top-level keys; module and load names must differ from them so dotted paths stay unambiguous
 RESERVED = tuple(Scenario.model_fields)
@@ -10,7 +10,7 @@ RESERVED = tuple(Scenario.model_fields)
 
 def fail(raw, sources, path, message):
     """Raise :class:`ScenarioError` for ``path`` (a raw-data key path)."""
-    raise ScenarioError(f"{sources.where(path)}: {format_path(path, raw)}: {message}")
+    raise ScenarioError(f"{located(sources, path, raw)}: {message}")
 
 
 def closest(word, options):

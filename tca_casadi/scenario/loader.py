@@ -10,7 +10,7 @@ from ..errors import ScenarioError
 from .checks import check_references
 from .overrides import apply_overrides
 from .schema import Scenario
-from .sources import SourceMap, clip, did_you_mean, format_path, shorten
+from .sources import SourceMap, clip, did_you_mean, located, shorten
 from .yaml_safe import parse_yaml
 
 
@@ -45,7 +45,7 @@ def refuse_code(raw, sources):
         if isinstance(config, dict) and config.get("kind") == "custom" and isinstance(config.get("entry_point"), str):
             path = ("muscle_types", name, "entry_point")
             folder = config.get("folder") if isinstance(config.get("folder"), str) else None
-            problems.append(f"{sources.where(path)}: {format_path(path, raw)}: this scenario runs Python code: "
+            problems.append(f"{located(sources, path, raw)}: this scenario runs Python code: "
                             f"{describe_entry_point(config['entry_point'], folder)}; if you trust it, allow it "
                             "with --allow-code (Python: allow_code=True)")
     if problems:
@@ -170,7 +170,7 @@ def _all_errors(exc, raw, sources):
     lines = []
     for error in errors[:MAX_LISTED]:
         path = _data_path(error["loc"], raw)
-        line = f"{sources.where(path)}: {format_path(path, raw)}: {_message(error, path)}"
+        line = f"{located(sources, path, raw)}: {_message(error, path)}"
         if line not in lines:
             lines.append(line)
     if len(errors) > MAX_LISTED:

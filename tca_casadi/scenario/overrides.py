@@ -38,7 +38,9 @@ def apply_overrides(raw, overrides, sources=None, label="--set"):
                 raise
             raise ScenarioError(f"{label} {str(exc).removeprefix('--set ')}") from None
         _assign(raw, key_path, value)
-        if sources is not None:
+        if sources is not None:             # it replaces any earlier override below it
+            for earlier in [k for k in sources.overridden if k[:len(key_path)] == key_path]:
+                del sources.overridden[earlier]
             sources.overridden[key_path] = f"{label} {path}"
     return raw
 

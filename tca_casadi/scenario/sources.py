@@ -21,12 +21,20 @@ class SourceMap:
         if below and path not in self.lines:
             return below[0]
         suffix = f" (after {', '.join(below)})" if below else ""
-        for cut in range(len(path), -1, -1):
+        for cut in range(len(path), -1, -1):           # an override replaced all below it
             if path[:cut] in self.overridden:
                 return self.overridden[path[:cut]]
+        for cut in range(len(path), -1, -1):
             if path[:cut] in self.lines:
                 return f"{self.origin}:{self.lines[path[:cut]]}{suffix}"
         return self.origin
+
+
+def located(sources, path, raw):
+    """``WHERE: PATH`` of a message about the key ``path``: where it came from and its written
+    path, once when the two say the same (``--set dynamics.integrator`` is both)."""
+    where, written = sources.where(path), format_path(path, raw)
+    return where if where.endswith(f" {written}") else f"{where}: {written}"
 
 
 def format_path(path, raw):

@@ -85,3 +85,18 @@ def test_every_subcommand_answers_help(command):
     run = subprocess.run([sys.executable, "-m", "tca_casadi.cli", command, "--help"], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert run.stdout.startswith(f"usage: tca-casadi {command}") and not run.stderr
+
+
+@pytest.mark.parametrize("overrides, expected", [
+    # the key once where the override and the key path say the same (issue 37's review)
+    (["dynamics.integrator=bdf1", "dynamics.enabled=true"],
+     "error: --set dynamics.integrator: 'bdf1' is not allowed: expected 'bdf2' or 'midpoint'"),
+    # an override of a whole mapping is where its keys came from, not the file's old line
+    (["solver={degree: x}"], "error: --set solver: solver.degree: input should be a valid integer"),
+    # a later override replaces an earlier one below it
+    (["solver.degree=2", "solver={degree: x}"], "error: --set solver: solver.degree: input should be a valid integer"),
+])
+def test_a_bad_override_is_named_once_and_where_it_came_from(scenarios, capsys, overrides, expected):
+    code = main(["solve", str(scenarios / "bending_module.yaml")] + [arg for o in overrides for arg in ("--set", o)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith(expected), err
