@@ -7,6 +7,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from conftest import SCENARIOS
+from random_robots import ramped_dynamics
 from tca_casadi import Simulation
 from tca_casadi.errors import ScenarioError
 from tca_casadi.time_simulation.motion import ENERGY_COLUMNS
@@ -53,3 +54,29 @@ def test_contact_the_dynamics_does_not_model_is_refused_in_one_line(setting, say
     with pytest.raises(ScenarioError, match=says) as caught:
         TimeSimulation(Simulation.from_file(TABLE, [setting, "duration=0.02"]), dt=0.01).run()
     assert "\n" not in str(caught.value)
+
+
+@pytest.mark.parametrize("seed", [3, 7])
+def test_random_robots_strike_a_ball_on_their_tips_path(seed):
+    """A ball placed halfway along the tip's largest excursion of the free run, its surface where
+    the tip's outline reaches then: the robot strikes it; every step balances globally with the
+    contact forces (1e-6, as without contact), no candidate cuts into the ball (1e-9 m), and the
+    impact loss never decreases."""
+    from tca_casadi.model.contact import outline_size
+    timed, free = ramped_dynamics(seed, "bdf2")
+    tips = free.tip_positions()
+    moved = tips - tips[0]
+    k = int(np.argmax(np.linalg.norm(moved, axis=1)))
+    direction = moved[k] / np.linalg.norm(moved[k])
+    a = outline_size(timed.sim.robot.modules[timed.sim.robot.tip_index]) / 2
+    radius = max(0.2 * np.linalg.norm(moved[k]), a)
+    ball = {"name": "ball", "shape": "sphere", "radius": float(radius),
+            "position": (tips[0] + 0.5 * moved[k] + direction * (radius + a)).tolist()}
+    _, hit = ramped_dynamics(seed, "bdf2", [ball])
+    assert hit.completed, hit.message
+    assert max(view.contact_columns()["ball.normal_force [N]"] for view in hit.views) > 0
+    assert max(hit.checked_balances()) < 1e-6
+    assert min(float(np.min(view.contact_gaps)) for view in hit.views[1:]) > -1e-9
+    loss = hit.energies[:, ENERGY_COLUMNS.index("impact_loss")]
+    assert np.all(np.diff(loss) >= -1e-12)
+    assert np.max(np.linalg.norm(hit.tip_positions() - tips[0], axis=1)) < np.linalg.norm(moved[k])   # stopped short
