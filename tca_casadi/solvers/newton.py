@@ -33,8 +33,8 @@ ROUNDOFF_FACTOR = 2
 #: fresh Jacobian every 12 steps instead of every 6, 30 % less time); 14 steps at most from
 #: 1e-3 to 1e-10, well inside the iteration budget
 NATIVE_CHORD_CONTRACTION = 0.3
-#: a semismooth Newton step taken without descent is at most this long in the scaled variables
-#: (each of order one: positions in module lengths, forces in force scales)
+#: a semismooth Newton step taken without descent moves the rods' scaled states (positions in
+#: module lengths, strains) by at most this much (the forces and multipliers as far as it says)
 SEMISMOOTH_STEP = 0.05
 
 
@@ -58,6 +58,10 @@ class SquareSystem:
         self._compile_jacobians = compile_jacobians
         self._residual_function = residual
         self._residual = BufferedFunction(native.residual if native is not None else residual)
+        #: the rods' states (positions, rotations, strains) in ``w``: a semismooth step is capped
+        #: on these only (forces and multipliers may need long steps)
+        self._shape_variables = (np.concatenate([index.ravel() for index in nlp.state_index])
+                                 if getattr(nlp, "state_index", None) else None)
         if compile_jacobians:
             if isinstance(jacobian, ca.Function):
                 jacobian = self._fast(jacobian)
@@ -105,7 +109,7 @@ class SquareSystem:
         chord steps run in compiled code (:mod:`.native`), with no Python between them, kept
         while they cut the residual by :data:`NATIVE_CHORD_CONTRACTION`. ``monotone`` False: where
         no backtracked step cuts ``|g|_2``, the step is taken all the same, capped at
-        :data:`SEMISMOOTH_STEP` in the scaled variables (semismooth Newton on complementarity: a
+        :data:`SEMISMOOTH_STEP` in the rods' scaled states (semismooth Newton on complementarity: a
         contact that closes, where the residual's kink defeats the line search; the cap keeps it
         from roots far away). Returns ``(w, SolveStatus)``."""
         started = time.perf_counter()
@@ -182,7 +186,8 @@ class SquareSystem:
                 return trial, g_trial, True
             alpha /= 2
         if not monotone:                         # the step, capped, if its residual is a number
-            longest = float(np.max(np.abs(step))) if step.size else 0.0
+            shape = step[self._shape_variables] if self._shape_variables is not None else step
+            longest = float(np.max(np.abs(shape))) if shape.size else 0.0
             trial = w - step * min(1.0, SEMISMOOTH_STEP / longest) if longest > 0 else w
             g_trial = self.residual(trial, P)
             if np.all(np.isfinite(g_trial)):
