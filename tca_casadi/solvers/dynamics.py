@@ -371,8 +371,9 @@ class RodDynamics:
 
     def _newton(self, guess, full, lu=None, contact=False):
         """Newton on the step's equations at the parameter vector ``full``: ``(w, status)``;
-        ``contact``: semismooth (full steps where the line search finds no descent) with
-        :data:`CONTACT_ITERATIONS` iterations, for a step where a contact closes or opens."""
+        ``contact``: semismooth (the step taken where the line search finds no descent, capped
+        on the rods' states: :meth:`SquareSystem.newton <tca_casadi.solvers.newton.SquareSystem.newton>`)
+        with :data:`CONTACT_ITERATIONS` iterations, for a step where a contact closes or opens."""
         self.solver.solve_count += 1
         return self.solver.square.newton(guess, full, self.solver.options.tolerance,
                                          CONTACT_ITERATIONS if contact else 25, lu=lu, monotone=not contact)
