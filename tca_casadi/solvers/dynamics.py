@@ -72,7 +72,8 @@ class DynamicSolver(CollocationSolver):
         actuators = {a.key: ActuatorState(float(tensions[k]), float(lengths[k]), float(lengths[k]) - references[k])
                      for k, a in enumerate(robot.actuators)}
         out = StepOutputs(np.array(robot_params, float), modules, actuators,
-                          load_markers(robot, modules, robot_params) if robot.point_loads else [], robot.tip_index)
+                          load_markers(robot, modules, robot_params) if robot.point_loads else [], robot.tip_index,
+                          parameter_names=dict(robot.layout.slices))
         if robot.obstacles:
             out.contact_forces = np.asarray(w_phys[nlp.contact_index], float).ravel()
             out.obstacles = [c.obstacle for c in robot.contacts]
@@ -229,13 +230,17 @@ class StepOutputs(TipOfModules):
     """What a dynamic run keeps of each step in place of its :class:`Solution` (built only when
     asked, issue 36): the robot parameters, per module its :class:`Centreline`, per actuator
     key its :class:`ActuatorState`, the point loads' markers (as ``Solution.loads``) and the
-    index of the tip's module. Read like a Solution by the energy account and the tables."""
+    index of the tip's module. Read like a Solution by the energy account, the tables and the
+    objects' tracking."""
     parameters: np.ndarray
     modules: list
     actuators: dict
     loads: list
     tip_module: int
     converged: bool = True
+    #: the parameters' slices by name (as a Solution's); the free bodies (none: refused in dynamics)
+    parameter_names: dict = field(default_factory=dict)
+    bodies: list = field(default_factory=list)
     #: with obstacles: the normal force [N] and the gap [m] at each contact candidate
     #: (``robot.contacts``), and per obstacle the nearest approach over the nodes [m]
     contact_forces: np.ndarray = None

@@ -306,7 +306,7 @@ class TimeSimulation:
         if not self.sim.scenario.objects:
             return
         tracker = ObjectTracker(self.sim.scenario, self.sim.robot)
-        for k, solution in enumerate(series.solutions):
+        for k, solution in enumerate(series.outputs):           # a dynamic run's step outputs
             picked = [n for n in tracker.names if tracker.held_in(solution, n) and not tracker.poses[n].held]
             try:
                 series.objects.append(tracker.advance(solution, f"t = {series.t[k]:g} s"))
