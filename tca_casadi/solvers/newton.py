@@ -35,7 +35,7 @@ ROUNDOFF_FACTOR = 2
 NATIVE_CHORD_CONTRACTION = 0.3
 #: a semismooth Newton step taken without descent moves the rods' scaled states (positions in
 #: module lengths, strains) by at most this much (the forces and multipliers as far as it says)
-SEMISMOOTH_STEP = 0.05
+SEMISMOOTH_STEP = 0.5
 
 
 def roundoff_floor(J, w):
