@@ -84,13 +84,13 @@ def save_timeseries_png(series, path, events=()):
 
 def _energies(axis, t, energies, n):
     """A dynamic run's energy account [mJ]: kinetic, elastic, gravitational (from its start),
-    the actuators' and loads' work, what damping dissipated, the impact loss (where there was
-    one) and the balance (zero up to the time discretisation)."""
+    the actuators' and loads' work, what damping dissipated, the impact loss and friction's
+    work (where there was any) and the balance (zero up to the time discretisation)."""
     from ..time_simulation.motion import ENERGY_COLUMNS
     shown = energies * 1e3
     shown[:, ENERGY_COLUMNS.index("gravitational_energy")] -= shown[0, ENERGY_COLUMNS.index("gravitational_energy")]
     for k, name in enumerate(ENERGY_COLUMNS):
-        if name == "impact_loss" and not np.any(shown[:, k]):      # no obstacles
+        if name in ("impact_loss", "friction_work") and not np.any(shown[:, k]):    # no contact, no friction
             continue
         style = dict(line_style(k, n), color="black") if name == "energy_balance" else line_style(k, n)
         axis.plot(t, shown[:, k], label=name.replace("_", " ") + (" (from t0)" if name.startswith("grav") else ""),

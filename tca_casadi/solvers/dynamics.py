@@ -18,6 +18,7 @@ from ..discretisation.dynamics import DynamicCollocationNLP
 from ..errors import ScenarioError
 from ..model.balance import load_markers
 from ..model.contact import gaps, outline_of, outline_size
+from ..model.history import carried_history
 from ..model.dynamics import (elastic_energy_density, inertia_per_length, inertial_loads, kinetic_energy_density,
                               point_inertia, point_mass_of)
 from ..model.rotations import rotation_numpy, rotations_of
@@ -179,16 +180,12 @@ CONTACT_ITERATIONS = 100
 
 
 def _check_contact(robot, integrator):
-    """ScenarioError for contact that rod dynamics does not model (yet): obstacles with
-    friction, objects as free bodies, obstacles with the midpoint rule (its end state, ``2 z -
-    x_n``, is extrapolated past the contact solved at the midpoint)."""
+    """ScenarioError for contact that rod dynamics does not model (yet): objects as free
+    bodies, obstacles with the midpoint rule (its end state, ``2 z - x_n``, is extrapolated past
+    the contact solved at the midpoint)."""
     if robot.bodies:
         raise ScenarioError(f"objects: {robot.bodies[0].name} is a free rigid body (it rests on a support); rod "
                             "dynamics does not give objects inertia yet: set dynamics.enabled: false")
-    frictional = [shape.name for shape in robot.obstacles if shape.friction > 0]
-    if frictional:
-        raise ScenarioError(f"obstacles: {frictional[0]} has friction; rod dynamics models frictionless contact "
-                            f"only (yet): set obstacles.{frictional[0]}.friction: 0 or dynamics.enabled: false")
     if robot.obstacles and integrator.at_midpoint:
         raise ScenarioError("dynamics.integrator: midpoint with obstacles: its end state is extrapolated past the "
                             "contact solved at the step's middle; use bdf2")
@@ -247,6 +244,8 @@ class StepOutputs(TipOfModules):
     contact_gaps: np.ndarray = None
     clearance: dict = field(default_factory=dict)
     obstacles: list = field(default_factory=list)
+    #: with friction: the closed contacts (ContactResult s, as a Solution's)
+    contacts: list = None
 
     def contact_columns(self):
         """Per obstacle ``{"NAME.normal_force [N]", "NAME.clearance [m]"}`` (as a Solution's;
@@ -275,6 +274,8 @@ class StepState:
     status: object = None
     solved: np.ndarray = None
     previous: "StepState" = field(default=None, repr=False)
+    #: its Solution where one was built for friction's history (without balance or search)
+    solution: object = field(default=None, repr=False)
 
 
 class RodDynamics:
@@ -311,7 +312,8 @@ class RodDynamics:
         """Begin at rest in the static ``solution`` (its collocation variables) at time ``t``."""
         static_w = solution.raw["w"]
         w = np.concatenate([static_w, np.zeros(self.solver.nlp.scale.size - static_w.size)])
-        self.states = [StepState(t, self.solver.node_values(w), w, np.array(solution.parameters, float))]
+        self.states = [StepState(t, self.solver.node_values(w), w, np.array(solution.parameters, float),
+                                 solution=solution)]
         self._equilibrium = np.array(solution.parameters, float)      # where the start was solved
         self._midpoints = []
         self._history_w = [(t, w)]               # (t, w) of the last three states, for the predictor
@@ -341,6 +343,8 @@ class RodDynamics:
         now = self.states[-1]
         c0, histories = self._coefficients(h)
         params = np.asarray(params, float)
+        if self.sim.robot.frictional_contacts:        # friction anchored where the contacts touch now
+            params = carried_history(self.sim.robot, params, self.contact_solution(now))
         scheme = self.integrator
         solved_at = scheme.parameters_at(params, now.params)
         full = self.solver.parameters(solved_at, c0, self.damping, histories)
@@ -369,7 +373,7 @@ class RodDynamics:
         state = StepState(now.t + h, self.solver.node_values(w), w, params, full=full, status=status, solved=solved,
                           previous=now)
         if len(self.states) == 2:          # it leaves the window: its nodes follow from w when asked
-            self.states[0].nodes = None
+            self.states[0].nodes = self.states[0].solution = None
         self.states = (self.states + [state])[-2:]
         self._history_w = (self._history_w + [(state.t, w)])[-3:]
         return state
@@ -448,17 +452,31 @@ class RodDynamics:
             return None, self.solver.evaluate(*self._failed, self.last_status, balance=balance)
         return state, self.solver.evaluate(state.solved, state.full, state.status, balance=balance)
 
-    def solution(self, state, balance=True):
+    def solution(self, state, balance=True, search=True):
         """The :class:`Solution` of the end of the step that reached ``state`` (for the
-        midpoint rule: :meth:`end_solution`, the balance that of the solved midpoint)."""
-        solved = self.solver.evaluate(state.solved, state.full, state.status, balance=balance)
+        midpoint rule: :meth:`end_solution`, the balance that of the solved midpoint);
+        ``search`` False: no search for contacts between nodes."""
+        solved = self.solver.evaluate(state.solved, state.full, state.status, search, balance)
         if not self.integrator.at_midpoint:
             return solved
         return self.end_solution(state, state.previous, solved)
 
+    def contact_solution(self, state):
+        """The Solution of ``state`` without its balance or the search between nodes (its closed
+        contacts, for friction's history and work), built once."""
+        if state.solution is None:
+            state.solution = self.solution(state, balance=False, search=False)
+        return state.solution
+
     def outputs(self, state):
         """The :class:`StepOutputs` of the end of the step that reached ``state`` (the start:
-        the state at rest, at its parameters)."""
+        the state at rest, at its parameters; with friction, its closed contacts too)."""
+        out = self._outputs(state)
+        if self.sim.robot.frictional_contacts:
+            out.contacts = self.contact_solution(state).contacts
+        return out
+
+    def _outputs(self, state):
         if state.full is None:
             return self.solver.outputs(state.w, self.solver.parameters(
                 state.params, 0.0, self.damping, [np.zeros((12, x[0].shape[1])) for x in self.nodes_of(state)]))

@@ -12,9 +12,11 @@ energy a point mass takes with it when it changes: an object let go), and the
 energy the rods' viscosity dissipated, ``int int xi_t . B xi_t ds dt`` (all in time by the
 trapezoidal rule, ``xi_t`` as ``(xi_{n+1} - xi_n) / h``), and with obstacles the impact loss,
 the work the contact forces take: per step ``sum_k f_k,n+1 (g_k,n - g_k,n+1) >= 0`` (the
-implicit step's contact force acts at its end; ``docs/contact.md`` section 5a). Their balance
+implicit step's contact force acts at its end; ``docs/contact.md`` section 5a), and with
+friction the energy friction took, ``-sum f_t . (x_{n+1} - x_n)`` over the contacts (their
+points' slip over the step). Their balance
 
-    (kinetic + elastic + gravitational)(t) - (...)(0) + dissipated + impact loss
+    (kinetic + elastic + gravitational)(t) - (...)(0) + dissipated + impact loss + friction work
         - actuator work - load work
 
 is zero up to the time discretisation (and the numerical damping of BDF2, which at an impact
@@ -34,7 +36,7 @@ STEP_RANGE = (1e-7, 0.1)
 #: a step that does not converge is halved at most this many times
 HALVINGS = 6
 ENERGY_COLUMNS = ("kinetic_energy", "elastic_energy", "gravitational_energy", "actuator_work", "load_work",
-                  "dissipated_energy", "impact_loss", "energy_balance")
+                  "dissipated_energy", "impact_loss", "friction_work", "energy_balance")
 
 
 def damping_of(config, scenario):
@@ -66,7 +68,8 @@ class EnergyAccount:
     def __init__(self, dynamics):
         self.dynamics = dynamics
         self.rows = []
-        self._work = {"actuator_work": 0.0, "load_work": 0.0, "dissipated_energy": 0.0, "impact_loss": 0.0}
+        self._work = {"actuator_work": 0.0, "load_work": 0.0, "dissipated_energy": 0.0, "impact_loss": 0.0,
+                      "friction_work": 0.0}
         self._start = None
 
     def stored(self, state, solution):
@@ -100,6 +103,7 @@ class EnergyAccount:
                 # the step's contact impulse acts at its end: sum f_{n+1} (g_n - g_{n+1}), = sum f_{n+1} g_n
                 self._work["impact_loss"] += float(solution.contact_forces @ (previous_solution.contact_gaps
                                                                                 - solution.contact_gaps))
+            self._work["friction_work"] += _friction_work(previous_solution, solution)
         stored, rigid = self.stored(state, solution)
         if previous is not None and not np.array_equal(solution.parameters, previous_solution.parameters):
             # a point mass that changed (an object let go or taken) takes or brings its energy
@@ -108,9 +112,10 @@ class EnergyAccount:
         if self._start is None:
             self._start = sum(stored)
         balance = (sum(stored) - self._start + self._work["dissipated_energy"] + self._work["impact_loss"]
-                   - self._work["actuator_work"] - self._work["load_work"])
+                   + self._work["friction_work"] - self._work["actuator_work"] - self._work["load_work"])
         self.rows.append((*stored, self._work["actuator_work"], self._work["load_work"],
-                          self._work["dissipated_energy"], self._work["impact_loss"], balance))
+                          self._work["dissipated_energy"], self._work["impact_loss"], self._work["friction_work"],
+                          balance))
 
     def _dissipated(self, previous, state):
         h = state.t - previous.t
@@ -121,6 +126,19 @@ class EnergyAccount:
             density = np.sum(self.dynamics.damping[m][:, None] * change * change, axis=0) / h
             total += float(density @ weights)
         return total
+
+
+def _friction_work(before, after):
+    """The energy [J] friction took from the rods over a step: ``-sum f_t . (x_{n+1} - x_n)``
+    over the contacts closed at both ends (``contacts`` of the two StepOutputs; only a contact
+    closed at the step's start is anchored and carries friction), ``x`` the point in contact.
+    With Coulomb's law ``f_t`` opposes the slip, so it is never negative; a sticking contact
+    does not move."""
+    if getattr(after, "contacts", None) is None or getattr(before, "contacts", None) is None:
+        return 0.0
+    was = {(c.module, c.s, c.obstacle): c.position for c in before.contacts}
+    return float(sum(-c.tangential_force @ (c.position - was[key]) for c in after.contacts
+                     if c.friction > 0 and (key := (c.module, c.s, c.obstacle)) in was))
 
 
 def _load_work(robot, before, after, during=None):

@@ -366,7 +366,8 @@ class TimeSimulation:
         from .motion import ENERGY_COLUMNS
         energies = series.energies
         # the energy in play: stored (kinetic and elastic; the change of gravitational) and moved (work)
-        moved = [ENERGY_COLUMNS.index(name) for name in ("actuator_work", "load_work", "dissipated_energy", "impact_loss")]
+        moved = [ENERGY_COLUMNS.index(name) for name in ("actuator_work", "load_work", "dissipated_energy", "impact_loss",
+                                                         "friction_work")]
         stored = float(np.max(energies[:, 0] + energies[:, 1]) + np.max(np.abs(energies[:, 2] - energies[0, 2]))
                        + np.max(np.abs(energies[:, moved])))
         worst = float(np.max(np.abs(energies[:, ENERGY_COLUMNS.index("energy_balance")])))

@@ -1,7 +1,8 @@
 """Contact in rod dynamics (issue 33): a damped cantilever released above a table falls onto
 it and comes to rest on it, in the static contact equilibrium; without the table, in the free
-one; the contact forces' work (the impact loss) is never negative; contact the dynamics does not
-model is refused in one line."""
+one; the contact forces' work (the impact loss) is never negative; with friction, Coulomb's cone
+holds and friction's work is never negative, sticking contacts do not slide; contact the
+dynamics does not model is refused in one line."""
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
@@ -47,7 +48,6 @@ def test_without_the_table_it_comes_to_rest_hanging():
 
 
 @pytest.mark.parametrize("setting, says", [
-    ("obstacles.table.friction=0.5", "table has friction; rod dynamics models frictionless contact only"),
     ("dynamics.integrator=midpoint", "midpoint with obstacles"),
 ])
 def test_contact_the_dynamics_does_not_model_is_refused_in_one_line(setting, says):
@@ -80,3 +80,42 @@ def test_random_robots_strike_a_ball_on_their_tips_path(seed):
     loss = hit.energies[:, ENERGY_COLUMNS.index("impact_loss")]
     assert np.all(np.diff(loss) >= -1e-12)
     assert np.max(np.linalg.norm(hit.tip_positions() - tips[0], axis=1)) < np.linalg.norm(moved[k])   # stopped short
+
+
+FRICTION = ["obstacles.table.friction=0.5", "contact.points=8", "duration=2"]
+
+
+def test_friction_on_the_table_keeps_to_coulombs_cone_and_takes_energy():
+    """The cantilever falls onto a table with friction 0.5 (Coulomb's law: the contacts'
+    anchors carried from step to step, backward Euler in time): at every step every closed
+    contact is inside or on the cone (1e-9 N), friction's work never decreases and is positive
+    (the contacts slid), the global balance with the friction forces holds (1e-8), and the rod
+    comes to rest elsewhere than without friction."""
+    series = TimeSimulation(Simulation.from_file(TABLE, FRICTION + ["contact.friction_law=coulomb"]), dt=0.005).run()
+    assert series.completed, series.message
+    for view in series.views:
+        for contact in view.contacts:
+            assert np.linalg.norm(contact.tangential_force) <= 0.5 * contact.normal_force + 1e-9
+    work = series.energies[:, ENERGY_COLUMNS.index("friction_work")]
+    assert work[-1] > 0 and np.all(np.diff(work) >= -1e-12)
+    assert max(series.checked_balances()) < 1e-8
+    assert any(c.sliding for view in series.views for c in view.contacts)
+    frictionless = TimeSimulation(Simulation.from_file(TABLE, ["contact.points=8", "duration=2"]), dt=0.005).run()
+    assert abs(series.tip_positions()[-1, 2] - frictionless.tip_positions()[-1, 2]) > 5e-5      # [m]
+
+
+def test_sticking_contacts_do_not_slide_or_take_energy():
+    """With ``contact.friction_law: stick`` (the default) an anchored contact sticks whatever it
+    takes: no contact that presses (1 uN or more at the step's end) slips over any step (1e-12
+    m). Only a contact lifting off slips (its sticking fades with its normal force, section 4's
+    step), so friction takes almost nothing: under 1e-5 of the peak kinetic energy."""
+    series = TimeSimulation(Simulation.from_file(TABLE, FRICTION), dt=0.005).run()
+    assert series.completed, series.message
+    for before, after in zip(series.views[:-1], series.views[1:]):
+        was = {(c.module, c.s): c.position for c in before.contacts}
+        for contact in after.contacts:
+            if (contact.module, contact.s) in was and contact.normal_force >= 1e-6:
+                assert_allclose(contact.position, was[contact.module, contact.s], rtol=0, atol=1e-12)
+    work = series.energies[:, ENERGY_COLUMNS.index("friction_work")]
+    assert np.all(np.diff(work) >= -1e-15)
+    assert work[-1] < 1e-5 * np.max(series.energies[:, ENERGY_COLUMNS.index("kinetic_energy")])
