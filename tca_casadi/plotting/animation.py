@@ -142,6 +142,8 @@ def animate_in_time(t, solutions, keys, temperatures, heated, stem, fps=10, max_
     ambient = float(np.nanmin(temperatures)) if len(t) and np.size(temperatures) else 0.0
     shown = [solutions[k] for k in frames]          # (a dynamic run builds only these)
     points = [m.p for s in shown for m in s.modules]
+    # where the rods touch an obstacle: an unbounded one (a wall) is drawn only inside the box
+    points += [np.asarray(c.position, float).reshape(3, 1) for s in shown for c in s.contacts]
     points += [pose.corners() for k in frames if objects for pose in objects[k].values()]
     points += [np.asarray(position, float).reshape(3, 1) for position, _, _ in marks]
     every = np.hstack(points) * 1e3
