@@ -215,7 +215,8 @@ def dynamics_rate(name, dt, steps, jit=False, problem=None):
     (what ``simulate`` does per step: Newton and the step's outputs; the Solutions with their
     global balance are built every ``dynamics.balance_every`` steps only) over ``steps`` steps of
     ``dt`` after a TCA's temperature steps by 10 degC (the static start, the dynamic NLP's build
-    and any compile not timed); ``jit``: with ``solver.jit``."""
+    and any compile not timed); ``jit``: with ``solver.jit``; ``problem``: ``(scenario,
+    overrides)`` instead of ``DYNAMIC_PROBLEMS[name]``."""
     from tca_casadi.solvers.dynamics import RodDynamics
     scenario, overrides = problem or DYNAMIC_PROBLEMS[name]
     sim = Simulation.from_file(SCENARIOS / f"{scenario}.yaml", overrides + [f"solver.jit={str(jit).lower()}"])
