@@ -136,7 +136,18 @@ class ContactResult:
 
 
 #: a contact object's table columns (:meth:`Solution.contact_columns`), in order
-BODY_COLUMNS = ("grip_force [N]", "friction_margin [N]", "support_force [N]", "z [m]")
+BODY_COLUMNS = ("grip_force [N]", "friction_margin [N]", "support_force [N]", "x [m]", "y [m]", "z [m]")
+
+
+def body_columns(bodies):
+    """Per free body (its :class:`BodyResult`) the table columns of :data:`BODY_COLUMNS`, named
+    ``NAME.COLUMN``: what holds it and how high it is."""
+    out = {}
+    for body in bodies:
+        values = (body.grip_force, body.friction_margin, float(np.linalg.norm(body.support_force)),
+                  *(float(x) for x in body.position))
+        out.update({f"{body.name}.{key}": value for key, value in zip(BODY_COLUMNS, values)})
+    return out
 
 
 @dataclass
@@ -211,16 +222,17 @@ class BodyResult:
     corners: Optional[SupportCorners] = None
 
     @classmethod
-    def of(cls, body, r, R, weight, forces, grips, corners):
+    def of(cls, body, r, R, weight, forces, grips, corners, inertial=None):
         """From the pose ``(r, R)``, ``weight`` (3,), the rods' ``forces`` ``[(point, force on the
-        rod)]``, the closed ``grips`` and the support's :class:`SupportCorners` (or None)."""
+        rod)]``, the closed ``grips``, the support's :class:`SupportCorners` (or None) and, in
+        dynamics, the body's d'Alembert force and moment ``inertial`` (in the residual)."""
         from .model.bodies import body_equilibrium
         r, R, weight = np.asarray(r, float).ravel(), np.asarray(R, float), np.asarray(weight, float).ravel()
         forces = [(np.asarray(point, float).ravel(), np.asarray(on_rod, float).ravel()) for point, on_rod in forces]
         zero = np.zeros(3)
         force, moment = body_equilibrium(r, zero, forces)            # what the grips put on it
         support = [] if corners is None else list(zip(corners.positions, corners.forces))
-        residual_force, residual_moment = body_equilibrium(r, weight, forces, support)
+        residual_force, residual_moment = body_equilibrium(r, weight, forces, support, inertial)
         if corners is None:
             return cls(body.name, r, R, grips, force, moment, weight, zero, zero, r, np.inf, 0.0, residual_force,
                        residual_moment)
@@ -378,10 +390,7 @@ class Solution(TipOfModules, ResultAPI):
         for name, nearest in self.clearance.items():
             out[f"{name}.normal_force [N]"] = sum(c.normal_force for c in self.contacts if c.obstacle == name)
             out[f"{name}.clearance [m]"] = nearest["gap"]
-        for body in self.bodies:            # contact objects: what holds them
-            values = (body.grip_force, body.friction_margin, float(np.linalg.norm(body.support_force)),
-                      float(body.position[2]))
-            out.update({f"{body.name}.{key}": value for key, value in zip(BODY_COLUMNS, values)})
+        out.update(body_columns(self.bodies))
         return out
 
     @property

@@ -450,7 +450,11 @@ class CollocationNLP:
         on the states at the candidates' nodes."""
         def state_at(m, s):
             return self._node_at[m][_breakpoint(self._node_at[m], s)]
-        self._g.extend(contact_conditions(self.robot, self.contact_views, state_at, self.param))
+        self._g.extend(contact_conditions(self.robot, self.contact_views, state_at, self.param, self._body_inertia))
+
+    #: a free body's d'Alembert force and moment at its pose unknowns (none in statics;
+    #: :class:`~tca_casadi.discretisation.dynamics.DynamicCollocationNLP` gives them)
+    _body_inertia = None
 
     # ------------------------------------------------------------------ helpers for solvers
     def banded_columns(self):

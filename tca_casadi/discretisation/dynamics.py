@@ -19,19 +19,28 @@ viscous matrix of each module (6,) [N m^2 s, N s].
 Time derivatives are ``x_t = c0 x + x_hist`` for the strain deviations and the velocities,
 with the scalar ``c0`` [1/s] and the history ``x_hist`` (per module, per node, ``[xi (6), q (3),
 w (3)]``, physical units per second), appended with ``B`` to the parameter vector:
-``P = [robot parameters; c0; B per module; history per module]``. One NLP serves every step, every step
+``P = [robot parameters; c0; B per module; history per module; history per free body]``.
+
+A free body (a contact object, :mod:`tca_casadi.model.bodies`) keeps its pose unknowns
+``[delta, g]``; its velocity and angular velocity are not unknowns but follow from them by the
+same rule, ``v = c0 delta + h``, ``omega = omega(g, c0 g + h)``, and its d'Alembert force and
+moment ``-m (c0 v + h)``, ``-R (J (c0 omega + h) + omega x J omega)`` enter its equilibrium. One NLP serves every step, every step
 size and every integrator (:mod:`tca_casadi.solvers.dynamics` sets ``c0`` and the history).
 """
 import casadi as ca
 import numpy as np
 
 from ..errors import ScenarioError
+from ..model.bodies import angular_velocity, body_rotation, box_moments, inertial_wrench
 from ..model.boundary import add, connector_of, loads_at
 from ..model.dynamics import inertia_per_length, inertial_loads, point_inertia, point_mass_of, velocity_rates
 from .collocation import CollocationNLP, _end_matrix
 
 #: history values per node: strain deviations (6), q (3), w (3)
 HISTORY_SIZE = 12
+#: history values per free body: its pose (delta (3), Gibbs vector (3)), its velocity (3) and
+#: body-frame angular velocity (3)
+BODY_HISTORY_SIZE = 12
 
 
 def time_scale(module):
@@ -82,6 +91,10 @@ class DynamicCollocationNLP(CollocationNLP):
             count = len(mesh.intervals) * (d + 1)
             self.history_index.append(size + np.arange(count * HISTORY_SIZE).reshape(count, HISTORY_SIZE))
             size += count * HISTORY_SIZE
+        self.body_history_index = []
+        for _ in self.robot.bodies:
+            self.body_history_index.append(size + np.arange(BODY_HISTORY_SIZE))
+            size += BODY_HISTORY_SIZE
         self._parameter_size = size
 
     @property
@@ -104,6 +117,20 @@ class DynamicCollocationNLP(CollocationNLP):
         c0 = self.P[self.c0_index]
         damping = self.P[self.damping_index[m].tolist()]
         return damping * (c0 * self._states[m][7:13, 0] + self._history(m, [0])[0:6, 0])
+
+    # ------------------------------------------------------------------ free bodies
+    def _body_inertia(self, body, pose):
+        """A free body's d'Alembert force and moment (:func:`~tca_casadi.model.bodies.inertial_wrench`)
+        at its pose unknowns ``pose`` (6,): its velocity ``v = c0 delta + h_delta``, the rate of
+        its Gibbs vector ``g_t = c0 g + h_g`` and so its angular velocity ``omega(g, g_t)``, and
+        their rates ``c0 v + h_v``, ``c0 omega + h_omega`` (``h`` the body's history)."""
+        c0 = self.P[self.c0_index]
+        history = self.P[self.body_history_index[body.index].tolist()]
+        rate = c0 * pose + history[0:6]
+        omega = angular_velocity(pose[3:6], rate[3:6])
+        mass = self.param(f"{body.name}.mass")[0]
+        return inertial_wrench(mass, box_moments(body.size, mass), body_rotation(body, pose[3:6]),
+                               c0 * rate[0:3] + history[6:9], omega, c0 * omega + history[9:12])
 
     # ------------------------------------------------------------------ rigid point inertias
     def _motion_at(self, m, where):

@@ -233,11 +233,14 @@ def support_equations(plane, body, r, R, anchors, sticks, corner_unknowns):
     return ca.vertcat(*out)
 
 
-def body_equilibrium(r, weight, grips, support=()):
+def body_equilibrium(r, weight, grips, support=(), inertial=None):
     """``[force (3); moment about r (3)]`` [N, N m] on a body: its ``weight`` (3,) at ``r``, each
     grip ``(point, force on the rod)`` reacted on it, each support force ``(point, force on the
-    body)``."""
+    body)``, and in dynamics its ``inertial`` (d'Alembert) force and moment about ``r``
+    (:func:`inertial_wrench`)."""
     force, moment = weight, 0 * weight
+    if inertial is not None:
+        force, moment = force + inertial[0], moment + inertial[1]
     for point, on_rod in grips:
         force = force - on_rod
         moment = moment - cross(point - r, on_rod)
@@ -245,6 +248,45 @@ def body_equilibrium(r, weight, grips, support=()):
         force = force + reaction
         moment = moment + cross(point - r, reaction)
     return force, moment
+
+
+# ----------------------------------------------------------------------------- inertia (issue 33)
+def box_moments(size, mass):
+    """The principal moments of inertia [kg m^2] (3,) of a uniform box of edges ``size`` (3,) [m]
+    and ``mass`` [kg] (number or symbol) about its centre, in its own frame:
+    ``m (b^2 + c^2) / 12``, ...; the box's frame is its principal frame."""
+    a, b, c = (float(x) ** 2 for x in size)
+    return [mass * (b + c) / 12.0, mass * (a + c) / 12.0, mass * (a + b) / 12.0]
+
+
+def angular_velocity(g, rate):
+    """The body-frame angular velocity [rad/s] (3,) of ``R0 R(g)`` when its Gibbs vector ``g``
+    changes at ``rate`` [1/s]: ``(g_t - g x g_t / 2) / (1 + |g|^2 / 4)`` (from
+    ``R^T R_t = [omega]x``; numbers or symbols)."""
+    if is_casadi(g) or is_casadi(rate):
+        import casadi as ca
+        return (rate - 0.5 * ca.cross(g, rate)) / (1 + ca.dot(g, g) / 4)
+    g, rate = np.asarray(g, float), np.asarray(rate, float)
+    return (rate - 0.5 * cross(g, rate)) / (1 + g @ g / 4)
+
+
+def inertial_wrench(mass, moments, R, acceleration, omega, omega_rate):
+    """The d'Alembert force [N] and moment about the centre [N m] (global frame) of a rigid box:
+    ``-m a`` and ``-R (J omega_t + omega x J omega)`` (Euler's equations in the body frame;
+    ``omega``, ``omega_rate`` body frame, ``moments`` the diagonal of ``J``)."""
+    if any(is_casadi(x) for x in (mass, R, acceleration, omega, omega_rate)):
+        import casadi as ca
+        J = ca.vertcat(*moments)
+        return -mass * acceleration, -(R @ (J * omega_rate + ca.cross(omega, J * omega)))
+    J = np.asarray([float(x) for x in moments])
+    omega, omega_rate = np.asarray(omega, float), np.asarray(omega_rate, float)
+    return -mass * np.asarray(acceleration, float), -(np.asarray(R, float) @ (J * omega_rate + cross(omega, J * omega)))
+
+
+def kinetic_energy(mass, moments, velocity, omega):
+    """``m |v|^2 / 2 + omega . J omega / 2`` [J] of a rigid box (numbers)."""
+    velocity, omega = np.asarray(velocity, float), np.asarray(omega, float)
+    return 0.5 * mass * float(velocity @ velocity) + 0.5 * float(np.asarray(moments, float) @ (omega * omega))
 
 
 def anchor_of(r, R, point):

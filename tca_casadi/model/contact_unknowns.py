@@ -113,10 +113,11 @@ def _frictional_scale(force_scale, normal=True):
     return np.r_[np.full(size - 1, force_scale), 1.0]
 
 
-def contact_conditions(robot, views, state_at, param):
+def contact_conditions(robot, views, state_at, param, inertia=None):
     """The equations of a contact block (module docstring), a list of CasADi columns.
     ``state_at(module, s)``: the deviation state (13,) at a candidate (its pose is what counts);
-    ``param(name)``: a parameter."""
+    ``param(name)``: a parameter; ``inertia(body, pose)``: in dynamics, a body's d'Alembert force
+    and moment (:func:`~.bodies.inertial_wrench`) at its pose unknowns (6,)."""
     out = []
     for c in robot.contacts:
         module = robot.modules[c.module]
@@ -130,12 +131,13 @@ def contact_conditions(robot, views, state_at, param):
             out.append(friction_equations(moved, n, param(robot.contact_parameter(c, "sticks")), f, tangential, slip,
                                           g, fs, gs, robot.obstacles[c.obstacle].friction,
                                           robot.friction_law == "coulomb"))
-    return out + body_conditions(robot, views, state_at, param)
+    return out + body_conditions(robot, views, state_at, param, inertia)
 
 
-def body_conditions(robot, views, state_at, param):
+def body_conditions(robot, views, state_at, param, inertia=None):
     """Per grip its normal complementarity and four friction equations; per body its six
-    equilibrium equations (scaled by ``f_o`` and ``f_o L_o``) and, on a support, five per corner."""
+    equilibrium equations (scaled by ``f_o`` and ``f_o L_o``; in dynamics with the ``inertia`` of
+    :func:`contact_conditions`) and, on a support, five per corner."""
     import casadi as ca
     out, on_body = [], [[] for _ in robot.bodies]
     poses = [(shape.position, shape.rotation) for shape in views.body_shapes]
@@ -162,7 +164,8 @@ def body_conditions(robot, views, state_at, param):
             out.append(support_equations(plane, body, r, R, anchors, sticks, corners))
             n = plane.signed_distance(r)[1]
             support = [(point, f * n + t) for point, (f, t, _) in zip(corner_points(body, r, R), corners)]
-        force, moment = body_equilibrium(r, weight, on_body[body.index], support)
+        inertial = None if inertia is None else inertia(body, views.poses[body.index])
+        force, moment = body_equilibrium(r, weight, on_body[body.index], support, inertial)
         out.append(ca.vertcat(force / fo, moment / (fo * lo)))
     return out
 

@@ -122,17 +122,24 @@ def _carry_grips(robot, params, solution):
 
 
 def _carry_supports(robot, params, solution):
-    from .bodies import placed_corners
+    """Each pressed corner anchored where it pressed, less its elastic give: a corner's
+    tangential compliance moves it ``kappa L_o f_t / f_o`` against its friction force
+    (:mod:`.bodies`), so the anchor is where it would rest unloaded. A sticking corner thus keeps
+    its anchor (re-anchoring it where it stands would let it creep by its give at every solve:
+    every time step of a dynamic run); a sliding one carries its slip."""
+    from .bodies import SUPPORT_COMPLIANCE, body_scales, placed_corners
     results = {b.name: b for b in solution.bodies}
     for body in robot.bodies:
         found = results.get(body.name)
         if body.support is None or found is None or found.corners is None:
             continue
-        pressed = found.corners.pressed
+        corners, (fo, lo) = found.corners, body_scales(body)
+        pressed = corners.pressed
         for j, origin in enumerate(placed_corners(body)):
             params[robot.layout[support_parameter(body.name, j, "sticks")]] = float(pressed[j])
             if pressed[j]:
-                params[robot.layout[support_parameter(body.name, j, "anchor")]] = found.corners.positions[j] - origin
+                give = SUPPORT_COMPLIANCE * lo / fo * corners.tangential_forces[j]
+                params[robot.layout[support_parameter(body.name, j, "anchor")]] = corners.positions[j] + give - origin
 
 
 def _carry_contacts(robot, params, solution):

@@ -46,8 +46,10 @@ def save_timeseries_png(series, path, events=()):
     kinds = [kind for kind in ("voltage", "current") if any(k == kind for k, _ in electrical.values())]
     has_tcas = len(series.keys) > 0
     has_actuators = bool(n and series.outputs[0].actuators)
+    bodies = [body.name for body in series.outputs[0].bodies] if n and getattr(series.outputs[0], "bodies", None) else []
     panels = ((["temperature"] if has_tcas else []) + (["power"] if heated else []) + kinds
-              + (["tension"] if has_actuators else []) + ["tip"] + (["energy"] if dynamic else []))
+              + (["tension"] if has_actuators else []) + ["tip"] + (["objects", "grip"] if bodies else [])
+              + (["energy"] if dynamic else []))
     fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.2 * len(panels) + 0.6), sharex=True, squeeze=False)
     axes = axes[:, 0]
     ax = dict(zip(panels, axes))
@@ -65,11 +67,14 @@ def save_timeseries_png(series, path, events=()):
         for axis, name in enumerate("xyz"):
             ax["tip"].plot(t, move[:, axis], label=f"tip {name}", **line_style(axis, n))
         ax["tip"].plot(t, np.linalg.norm(move, axis=1), color="black", label="|tip displacement|", **line_style(3, n))
+    if bodies:
+        _bodies(ax["objects"], ax["grip"], t, series.outputs, bodies, n)
     if dynamic:
         _energies(ax["energy"], t, series.energies[:n], n)
     labels = {"temperature": "temperature [degC]", "power": "electrical power [mW]", "voltage": "voltage [V]",
               "current": "current [mA]", "tension": "tension [mN]",
-              "tip": "tip displacement [mm]", "energy": "energy [mJ]"}
+              "tip": "tip displacement [mm]", "energy": "energy [mJ]", "objects": "object displacement [mm]",
+              "grip": "grip force [mN]"}
     for name, axis in ax.items():
         axis.set_ylabel(labels[name])
         axis.grid(True, alpha=0.3)
@@ -80,6 +85,18 @@ def save_timeseries_png(series, path, events=()):
     state = "" if series.completed else f"  (stopped: {series.message[:60]})"
     axes[0].set_title(f"simulate{state}", fontsize=10)
     return finish(plt, fig, path, dpi=110)
+
+
+def _bodies(moved, gripped, t, outputs, names, n):
+    """The free bodies' centres' displacement from the start [mm] (x, y, z) and the sum of their
+    grips' normal forces [mN] at the outputs."""
+    for j, name in enumerate(names):
+        found = [next(b for b in out.bodies if b.name == name) for out in outputs]
+        centres = np.array([b.position for b in found]) * 1e3
+        for axis, label in enumerate("xyz"):
+            moved.plot(t, centres[:, axis] - centres[0, axis], label=f"{name} {label}",
+                       **line_style(3 * j + axis, n))
+        gripped.plot(t, [b.grip_force * 1e3 for b in found], label=name, **line_style(j, n))
 
 
 def _energies(axis, t, energies, n):

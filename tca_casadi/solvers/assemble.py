@@ -147,7 +147,8 @@ def body_results(robot, params, module_data, values):
     :class:`BodyResult` per body, a ``slipping`` warning for each grip (or support) that needs
     more friction than it has or slides, and each grip's and support corner's side of its
     complementarities' corners. ``values``: ``{"grips": [(f_n, f_t (3), slip multiplier), ...],
-    "poses": [(6,), ...], "supports": {b: (8 x 5,)}}`` [SI]."""
+    "poses": [(6,), ...], "supports": {b: (8 x 5,)}}`` [SI], in dynamics with ``"inertia"``: per
+    body its d'Alembert force and moment (global)."""
     from ..model.bodies import body_pose, body_shape
     from ..solution import BodyResult
     param = robot.param_function(params)
@@ -169,14 +170,15 @@ def body_results(robot, params, module_data, values):
         _closed_contact(module, c.s, "object", body.name, point, n, float(g), force, tangential, multiplier,
                         body.friction, body.sliding, closed, warnings, pattern)
     loads = {m: (np.array(p).T, np.array(f).T) for m, (p, f) in loads.items()}
-    bodies = []
-    for body, (r, R), forces in zip(robot.bodies, placed, on_body):
+    bodies, inertia = [], values.get("inertia") or [None] * len(robot.bodies)
+    for body, (r, R), forces, inertial in zip(robot.bodies, placed, on_body, inertia):
         corners = None
         if body.index in values["supports"]:
             corners, corner_pattern = _support_corners(robot, body, r, R, values["supports"][body.index], param)
             pattern.extend(corner_pattern)
         weight = float(param(f"{body.name}.mass")[0]) * param("gravity")
-        result = BodyResult.of(body, r, R, weight, forces, [c for c in closed if c.obstacle == body.name], corners)
+        result = BodyResult.of(body, r, R, weight, forces, [c for c in closed if c.obstacle == body.name], corners,
+                               inertial)
         if result.support_slipping:
             warnings.append(PhysicsWarning("slipping", _support_message(body, result)))
         bodies.append(result)

@@ -271,7 +271,8 @@ class CollocationSolver:
         if self.robot.bodies:
             contact["bodies"] = {"grips": [w_phys[i] for i in nlp.grip_index],
                                  "poses": [w_phys[i] for i in nlp.pose_index],
-                                 "supports": {b: w_phys[i] for b, i in nlp.support_index.items()}}
+                                 "supports": {b: w_phys[i] for b, i in nlp.support_index.items()},
+                                 "inertia": self._body_inertias(w, params)}
         notices = []
         if status.tolerance > self.options.tolerance:
             notices.append(PhysicsWarning("tolerance_floor", f"the max scaled residual {status.residual:.1e} met a "
@@ -283,6 +284,10 @@ class CollocationSolver:
                               check_balance=balance,
                               extra_loads=self._extra_loads(w, params, module_data) if balance else None,
                               **contact)
+
+    def _body_inertias(self, w, params):
+        """Per free body its d'Alembert force and moment (none in statics)."""
+        return None
 
     def _tensions(self, w_phys, params):
         """Every actuator's tension [N] (``robot.actuators`` order): an unknown's from the

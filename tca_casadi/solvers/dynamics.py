@@ -17,12 +17,14 @@ import numpy as np
 from ..discretisation.dynamics import DynamicCollocationNLP
 from ..errors import ScenarioError
 from ..model.balance import load_markers
-from ..model.contact import gaps, outline_of, outline_size
+from ..model.bodies import (CONTACT_UNKNOWNS, angular_velocity, body_pose, body_rotation, body_shape, box_moments,
+                             inertial_wrench, kinetic_energy)
+from ..model.contact import CLOSED, gaps, outline_of, outline_size
 from ..model.history import carried_history
 from ..model.dynamics import (elastic_energy_density, inertia_per_length, inertial_loads, kinetic_energy_density,
                               point_inertia, point_mass_of)
 from ..model.rotations import rotation_numpy, rotations_of
-from ..solution import TipOfModules
+from ..solution import TipOfModules, body_columns
 from .collocation import CollocationSolver
 from .compiled import has_compiler
 from .integrators import ImplicitEuler, integrator_named
@@ -53,9 +55,43 @@ class DynamicSolver(CollocationSolver):
 
     def parameters(self, params, c0, damping, histories):
         """``[params; c0; B per module; history]`` from per-module damping diagonals (6,) and
-        histories ((12, nodes) each)."""
+        histories ((12, nodes) each, then with free bodies (12, bodies): theirs, zero when
+        left out)."""
+        histories = list(histories)
+        if self.robot.bodies and len(histories) == len(self.robot.modules):
+            histories.append(np.zeros((12, len(self.robot.bodies))))
         return np.concatenate([np.asarray(params, float), [c0]] + [np.asarray(b, float) for b in damping]
                               + [h.T.ravel() for h in histories])
+
+    def body_values(self, w, params):
+        """The free bodies' ``[pose (6); velocity (3) [m/s]; body-frame angular velocity (3)
+        [rad/s]]`` (12, bodies) at scaled ``w`` and the step's parameter vector ``params``
+        (:meth:`~tca_casadi.discretisation.dynamics.DynamicCollocationNLP._body_inertia`'s
+        rule), or None without bodies."""
+        if not self.robot.bodies:
+            return None
+        nlp, physical = self.nlp, np.asarray(w, float) * self.nlp.scale
+        c0, out = params[nlp.c0_index], []
+        for body in self.robot.bodies:
+            pose = physical[nlp.pose_index[body.index]]
+            rate = c0 * pose + params[nlp.body_history_index[body.index]][0:6]
+            out.append(np.r_[pose, rate[0:3], angular_velocity(pose[3:6], rate[3:6])])
+        return np.array(out).T
+
+    def _body_inertias(self, w, params):
+        """Per free body its d'Alembert force and moment (global) at scaled ``w`` and ``params``
+        (for its :class:`~tca_casadi.solution.BodyResult`'s residual)."""
+        values = self.body_values(w, params)
+        if values is None:
+            return None
+        nlp, param = self.nlp, self.robot.param_function(params[:self.robot.layout.size])
+        c0, out = params[nlp.c0_index], []
+        for body, value in zip(self.robot.bodies, values.T):
+            history = params[nlp.body_history_index[body.index]]
+            mass = float(param(f"{body.name}.mass")[0])
+            out.append(inertial_wrench(mass, box_moments(body.size, mass), body_rotation(body, value[3:6]),
+                                       c0 * value[6:9] + history[6:9], value[9:12], c0 * value[9:12] + history[9:12]))
+        return out
 
     def outputs(self, w, params):
         """The :class:`StepOutputs` at scaled ``w`` and the step's parameter vector ``params``:
@@ -79,7 +115,23 @@ class DynamicSolver(CollocationSolver):
             out.contact_forces = np.asarray(w_phys[nlp.contact_index], float).ravel()
             out.obstacles = [c.obstacle for c in robot.contacts]
             out.contact_gaps, out.clearance = self._gaps(robot.at(robot_params).obstacles, modules)
+        if robot.grips:
+            out.grip_forces = np.array([w_phys[index[0]] for index in nlp.grip_index], float)
+            out.grip_gaps = self._grip_gaps(w_phys, modules)
         return out
+
+    def _grip_gaps(self, w_phys, modules):
+        """The gaps [m] (grips,) of the grip candidates (``robot.grips``) to their bodies at the
+        poses in ``w_phys``, at the centrelines' nearest nodes."""
+        robot, nlp = self.robot, self.nlp
+        shapes = [body_shape(body, *body_pose(body, w_phys[nlp.pose_index[body.index]])) for body in robot.bodies]
+        out = []
+        for c in robot.grips:
+            line = modules[c.module]
+            k = int(np.argmin(np.abs(line.s - c.s)))
+            out.append(float(gaps(shapes[c.body], outline_of(robot.modules[c.module]), line.p[:, k:k + 1],
+                                  line.h[:, k:k + 1])[0]))
+        return np.array(out)
 
     def _gaps(self, shapes, modules):
         """``(gaps (contacts,) [m] at the contact candidates, {obstacle: nearest approach [m]
@@ -177,15 +229,18 @@ class DynamicSolver(CollocationSolver):
 CLEARANCE = 0.5
 #: Newton's iterations (chord steps included) on a step where a contact closes or opens
 CONTACT_ITERATIONS = 100
+#: a step in which a contact closes (an impact) is taken by the integrator's first-step rule
+#: (BDF2: implicit Euler), and so are this many after it: a two-step rule whose history straddles
+#: the impact extrapolates it into a rebound (a body landing at 0.25 m/s left at 0.1 m/s). The
+#: impact's step lands it still moving in, the next stops it, the one after steps from a
+#: velocity history past the stop; then BDF2 resumes (``docs/contact.md`` section 5a)
+RESTART_STEPS = 2
 
 
 def _check_contact(robot, integrator):
-    """ScenarioError for contact that rod dynamics does not model (yet): objects as free
-    bodies, obstacles with the midpoint rule (its end state, ``2 z - x_n``, is extrapolated past
-    the contact solved at the midpoint)."""
-    if robot.bodies:
-        raise ScenarioError(f"objects: {robot.bodies[0].name} is a free rigid body (it rests on a support); rod "
-                            "dynamics does not give objects inertia yet: set dynamics.enabled: false")
+    """ScenarioError for contact that rod dynamics does not model: obstacles (and so free
+    bodies, which rest on one) with the midpoint rule (its end state, ``2 z - x_n``, is
+    extrapolated past the contact solved at the midpoint)."""
     if robot.obstacles and integrator.at_midpoint:
         raise ScenarioError("dynamics.integrator: midpoint with obstacles: its end state is extrapolated past the "
                             "contact solved at the step's middle; use bdf2")
@@ -235,7 +290,8 @@ class StepOutputs(TipOfModules):
     loads: list
     tip_module: int
     converged: bool = True
-    #: the parameters' slices by name (as a Solution's); the free bodies (none: refused in dynamics)
+    #: the parameters' slices by name (as a Solution's); the free bodies' BodyResult s (with
+    #: free bodies: each step's, from its Solution)
     parameter_names: dict = field(default_factory=dict)
     bodies: list = field(default_factory=list)
     #: with obstacles: the normal force [N] and the gap [m] at each contact candidate
@@ -246,15 +302,29 @@ class StepOutputs(TipOfModules):
     obstacles: list = field(default_factory=list)
     #: with friction: the closed contacts (ContactResult s, as a Solution's)
     contacts: list = None
+    #: with free bodies: the normal force [N] and the gap [m] of each grip candidate
+    #: (``robot.grips``), and per body its pose, velocity [m/s] and body-frame angular velocity
+    #: [rad/s] (12, bodies) (:meth:`DynamicSolver.body_values`)
+    grip_forces: np.ndarray = None
+    grip_gaps: np.ndarray = None
+    body_motion: np.ndarray = None
 
     def contact_columns(self):
         """Per obstacle ``{"NAME.normal_force [N]", "NAME.clearance [m]"}`` (as a Solution's;
-        the clearance here is the nearest node's, not searched between nodes)."""
+        the clearance here is the nearest node's, not searched between nodes); per free body its
+        :func:`~tca_casadi.solution.body_columns` and velocity ``NAME.vx|vy|vz [m/s]``."""
         out = {}
         for k, name in enumerate(self.clearance):
             out[f"{name}.normal_force [N]"] = float(sum(f for f, c in zip(self.contact_forces, self.obstacles) if c == k))
             out[f"{name}.clearance [m]"] = self.clearance[name]
+        out.update(body_columns(self.bodies))
+        for body, motion in zip(self.bodies, () if self.body_motion is None else self.body_motion.T):
+            out.update({f"{body.name}.v{axis} [m/s]": float(v) for axis, v in zip("xyz", motion[6:9])})
         return out
+
+    def body_velocity(self, k=0):
+        """The velocity [m/s] (3,) of free body ``k`` (``robot.bodies`` order)."""
+        return self.body_motion[6:9, k]
 
 
 @dataclass
@@ -276,6 +346,10 @@ class StepState:
     previous: "StepState" = field(default=None, repr=False)
     #: its Solution where one was built for friction's history (without balance or search)
     solution: object = field(default=None, repr=False)
+    #: the free bodies' pose, velocity and angular velocity (12, bodies) (DynamicSolver.body_values)
+    bodies: np.ndarray = None
+    #: how many more steps from it restart the integrator (its first step's rule: an impact)
+    restart: int = 0
 
 
 class RodDynamics:
@@ -312,22 +386,31 @@ class RodDynamics:
         """Begin at rest in the static ``solution`` (its collocation variables) at time ``t``."""
         static_w = solution.raw["w"]
         w = np.concatenate([static_w, np.zeros(self.solver.nlp.scale.size - static_w.size)])
+        at_rest = self.solver.parameters(solution.parameters, 0.0, self.damping,
+                                         [np.zeros((12, x[0].shape[1])) for x in self.solver.node_values(w)])
         self.states = [StepState(t, self.solver.node_values(w), w, np.array(solution.parameters, float),
-                                 solution=solution)]
+                                 solution=solution, bodies=self.solver.body_values(w, at_rest))]
         self._equilibrium = np.array(solution.parameters, float)      # where the start was solved
         self._midpoints = []
         self._history_w = [(t, w)]               # (t, w) of the last three states, for the predictor
         return self.states[-1]
 
-    def _coefficients(self, h):
-        """``(c0, history per module)`` for the next step of size ``h``: the integrator's (its
-        first step's rule while there is no step before)."""
+    def _coefficients(self, h, first=False):
+        """``(c0, history per module)`` for the next step of size ``h``: the integrator's, or
+        its first step's rule (``first``: no step before it, or a restart after an impact,
+        :data:`RESTART_STEPS`)."""
         now = self.states[-1]
-        nodes = [np.vstack(x) for x in self.nodes_of(now)]
-        if len(self.states) < 2:
-            return self.integrator.first().coefficients(h, nodes)
+        if first:
+            return self.integrator.first().coefficients(h, self._history_values(now))
         before = self.states[-2]
-        return self.integrator.coefficients(h, nodes, [np.vstack(x) for x in self.nodes_of(before)], now.t - before.t)
+        return self.integrator.coefficients(h, self._history_values(now), self._history_values(before),
+                                            now.t - before.t)
+
+    def _history_values(self, state):
+        """What the integrator's history is made of at ``state``: per module its node values
+        (12, nodes), then with free bodies theirs (12, bodies)."""
+        values = [np.vstack(x) for x in self.nodes_of(state)]
+        return values if state.bodies is None else values + [state.bodies]
 
     def nodes_of(self, state):
         """A state's node values (recomputed from its ``w`` if it dropped them)."""
@@ -341,25 +424,22 @@ class RodDynamics:
         :class:`StepState` at the end of the step (its Solution is built only on request:
         :meth:`solution`), or None if Newton did not converge (``last_status`` says why)."""
         now = self.states[-1]
-        c0, histories = self._coefficients(h)
         params = np.asarray(params, float)
-        if self.sim.robot.frictional_contacts:        # friction anchored where the contacts touch now
+        if self.sim.robot.path_dependent:        # friction anchored where the contacts touch now
             params = carried_history(self.sim.robot, params, self.contact_solution(now))
         scheme = self.integrator
         solved_at = scheme.parameters_at(params, now.params)
+        restarting = len(self.states) < 2 or now.restart > 0
+        c0, histories = self._coefficients(h, restarting)
         full = self.solver.parameters(solved_at, c0, self.damping, histories)
-        guess = self._predicted(now.t + scheme.fraction * h)
-        w, status = self._newton(guess, full, self._lu)
-        if not status.success:
-            w, status = self._continued(guess, self._solved_parameters(now), solved_at, c0, histories, status,
-                                        contact=bool(self.sim.robot.obstacles))
-        if not status.success and self.sim.robot.obstacles:
-            # a contact closing or opening: the complementarity's kink defeats the line search
-            w, status = self._newton(guess, full, contact=True)
-            clear = None if status.success else self._clear_of_obstacles(guess, solved_at)
-            if clear is not None:           # an impact: from the obstacles moved clear back to their places
-                w, status = self._continued(guess, clear, solved_at, c0, histories, status, solve_start=True,
-                                            contact=True)
+        w, status = self._solve(now, solved_at, full, c0, histories, self._predicted(now.t + scheme.fraction * h))
+        if status.success and not restarting and self._closes(now.w, w):
+            # an impact: its step by the first-step rule too (RESTART_STEPS)
+            c0, histories = self._coefficients(h, True)
+            first = self.solver.parameters(solved_at, c0, self.damping, histories)
+            again, again_status = self._solve(now, solved_at, first, c0, histories, w)
+            if again_status.success:
+                w, status, full = again, again_status, first
         self._lu = self.solver.square.last_lu           # chord steps of the next step start on it
         self.last_status = status
         if not status.success:
@@ -371,12 +451,46 @@ class RodDynamics:
             self._midpoints = (self._midpoints + [middle])[-2:]
             w = scheme.end(w, now.w)
         state = StepState(now.t + h, self.solver.node_values(w), w, params, full=full, status=status, solved=solved,
-                          previous=now)
+                          previous=now, bodies=self.solver.body_values(w, full))
+        state.restart = RESTART_STEPS if self._closes(now.w, w) else max(now.restart - 1, 0)
         if len(self.states) == 2:          # it leaves the window: its nodes follow from w when asked
             self.states[0].nodes = self.states[0].solution = None
         self.states = (self.states + [state])[-2:]
         self._history_w = (self._history_w + [(state.t, w)])[-3:]
         return state
+
+    def _solve(self, now, solved_at, full, c0, histories, guess):
+        """The step's variables from ``now`` at the parameter vector ``full`` (robot parameters
+        ``solved_at``, ``c0``, ``histories``) from ``guess``: Newton, then the fallbacks of
+        :meth:`advance`. ``(w, status)``."""
+        w, status = self._newton(guess, full, self._lu)
+        if not status.success:
+            w, status = self._continued(guess, self._solved_parameters(now), solved_at, c0, histories, status,
+                                        contact=bool(self.sim.robot.obstacles))
+        if not status.success and self.sim.robot.obstacles:
+            # a contact closing or opening: the complementarity's kink defeats the line search
+            w, status = self._newton(guess, full, contact=True)
+            clear = None if status.success else self._clear_of_obstacles(guess, solved_at)
+            if clear is not None:           # an impact: from the obstacles moved clear back to their places
+                w, status = self._continued(guess, clear, solved_at, c0, histories, status, solve_start=True,
+                                            contact=True)
+        return w, status
+
+    def _closes(self, before, after):
+        """Whether a contact (a rod's against an obstacle, a grip, a body's corner) open at the
+        scaled variables ``before`` is closed at ``after``: an impact."""
+        index = self._normal_force_index
+        if index.size == 0:
+            return False
+        return bool(np.any((np.asarray(after)[index] > CLOSED) & (np.asarray(before)[index] <= CLOSED)))
+
+    @functools.cached_property
+    def _normal_force_index(self):
+        """Indices in ``w`` of every contact's normal force (scaled by its force scale)."""
+        nlp = self.solver.nlp
+        parts = [np.asarray(nlp.contact_index, int)] + [np.asarray(i[0:1], int) for i in nlp.grip_index]
+        parts += [np.asarray(i[0::CONTACT_UNKNOWNS], int) for i in nlp.support_index.values()]
+        return np.concatenate(parts)
 
     def _newton(self, guess, full, lu=None, contact=False):
         """Newton on the step's equations at the parameter vector ``full``: ``(w, status)``;
@@ -472,8 +586,9 @@ class RodDynamics:
         """The :class:`StepOutputs` of the end of the step that reached ``state`` (the start:
         the state at rest, at its parameters; with friction, its closed contacts too)."""
         out = self._outputs(state)
-        if self.sim.robot.frictional_contacts:
-            out.contacts = self.contact_solution(state).contacts
+        if self.sim.robot.path_dependent:
+            found = self.contact_solution(state)
+            out.contacts, out.bodies, out.body_motion = found.contacts, found.bodies, state.bodies
         return out
 
     def _outputs(self, state):
@@ -604,6 +719,21 @@ class RodDynamics:
             cache[key] = [(*inertia_per_length(module, param), evaluated.modules[m].stiffness,
                            self.solver.nlp.node_weights(m)[:-1]) for m, module in enumerate(self.sim.robot.modules)]
         return cache[key]
+
+    def body_energies(self, state, params):
+        """``(kinetic, gravitational)`` [J] of the free bodies at ``state``: ``m |v|^2 / 2 +
+        omega . J omega / 2`` and ``-m g . r`` (masses and gravity from ``params``)."""
+        if state.bodies is None:
+            return 0.0, 0.0
+        robot = self.sim.robot
+        param = robot.param_function(params)
+        gravity = np.asarray(param("gravity"), float).ravel()
+        kinetic = potential = 0.0
+        for body, value in zip(robot.bodies, state.bodies.T):
+            mass = float(param(f"{body.name}.mass")[0])
+            kinetic += kinetic_energy(mass, box_moments(body.size, mass), value[6:9], value[9:12])
+            potential -= mass * float(gravity @ (body.position + value[0:3]))
+        return kinetic, potential
 
     def energies(self, state, params):
         """``(kinetic, elastic)`` [J] of the rods at ``state`` (Gauss quadrature on the nodes)."""

@@ -75,14 +75,12 @@ class EnergyAccount:
     def stored(self, state, solution):
         """``(kinetic, elastic, gravitational)`` [J] at a state and its Solution (or its
         StepOutputs), and the rigid point masses' share of their sum."""
-        robot, params = self.dynamics.sim.robot, solution.parameters
+        params = solution.parameters
         kinetic, elastic = self.dynamics.energies(state, params)
-        gravity = params[robot.layout["gravity"]]
-        potential = 0.0
-        for result, (mass, *_) in zip(solution.modules, self.dynamics.sections(params)):
-            potential -= float(mass * (gravity @ result.p) @ result.weights)
         rigid_kinetic, rigid_potential = self.dynamics.rigid_energies(state, solution)
-        return (kinetic + rigid_kinetic, elastic, potential + rigid_potential), rigid_kinetic + rigid_potential
+        body_kinetic, _ = self.dynamics.body_energies(state, params)
+        return ((kinetic + rigid_kinetic + body_kinetic, elastic, self._gravitational(state, solution, params)),
+                rigid_kinetic + rigid_potential)
 
     def add(self, previous, state, solution, previous_solution, during=None):
         """Account for the step from ``previous`` to ``state`` (StepStates, with their
@@ -103,8 +101,15 @@ class EnergyAccount:
                 # the step's contact impulse acts at its end: sum f_{n+1} (g_n - g_{n+1}), = sum f_{n+1} g_n
                 self._work["impact_loss"] += float(solution.contact_forces @ (previous_solution.contact_gaps
                                                                                 - solution.contact_gaps))
+            if getattr(solution, "grip_forces", None) is not None:
+                self._work["impact_loss"] += float(solution.grip_forces @ (previous_solution.grip_gaps
+                                                                             - solution.grip_gaps))
+            self._work["impact_loss"] += _support_impact_loss(previous_solution, solution)
             self._work["friction_work"] += _friction_work(previous_solution, solution)
+            self._work["friction_work"] += _body_friction_work(previous_solution, solution)
         stored, rigid = self.stored(state, solution)
+        if previous is not None:
+            self._work["load_work"] += self._field_work(previous, state, previous_solution, solution)
         if previous is not None and not np.array_equal(solution.parameters, previous_solution.parameters):
             # a point mass that changed (an object let go or taken) takes or brings its energy
             kept = self.dynamics.rigid_energies(state, solution, previous_solution.parameters)
@@ -116,6 +121,29 @@ class EnergyAccount:
         self.rows.append((*stored, self._work["actuator_work"], self._work["load_work"],
                           self._work["dissipated_energy"], self._work["impact_loss"], self._work["friction_work"],
                           balance))
+
+    def _field_work(self, previous, state, before, after):
+        """The work [J] of a change of gravity over a step (a lift's acceleration is one, in its
+        frame): ``-sum m (g_{n+1} - g_n) . (x_n + x_{n+1}) / 2`` over every mass, as the mean over
+        the step's two ends of the gravitational energy's change with ``g`` alone."""
+        robot = self.dynamics.sim.robot
+        old = np.asarray(before.parameters, float)
+        index = robot.layout["gravity"]
+        if np.array_equal(old[index], np.asarray(after.parameters, float)[index]):
+            return 0.0
+        turned = old.copy()
+        turned[index] = np.asarray(after.parameters, float)[index]
+        return 0.5 * sum(self._gravitational(x, view, turned) - self._gravitational(x, view, old)
+                         for x, view in ((previous, before), (state, after)))
+
+    def _gravitational(self, state, view, params):
+        """The gravitational energy [J] of the rods, rigid point masses and free bodies at
+        ``state`` (its StepOutputs ``view``) with the masses and gravity of ``params``."""
+        gravity = np.asarray(params, float)[self.dynamics.sim.robot.layout["gravity"]]
+        potential = -sum(float(mass * (gravity @ result.p) @ result.weights)
+                         for result, (mass, *_) in zip(view.modules, self.dynamics.sections(params)))
+        return (potential + self.dynamics.rigid_energies(state, view, params)[1]
+                + self.dynamics.body_energies(state, params)[1])
 
     def _dissipated(self, previous, state):
         h = state.t - previous.t
@@ -139,6 +167,37 @@ def _friction_work(before, after):
     was = {(c.module, c.s, c.obstacle): c.position for c in before.contacts}
     return float(sum(-c.tangential_force @ (c.position - was[key]) for c in after.contacts
                      if c.friction > 0 and (key := (c.module, c.s, c.obstacle)) in was))
+
+
+def _support_impact_loss(before, after):
+    """The free bodies' supports' share of the impact loss over a step [J]: ``sum f_{n+1} (g_n -
+    g_{n+1})`` over every body's corners."""
+    was = {body.name: body.corners for body in before.bodies if body.corners is not None}
+    return float(sum(body.corners.normal_forces @ (was[body.name].gaps - body.corners.gaps)
+                     for body in after.bodies if body.corners is not None and body.name in was))
+
+
+def _body_friction_work(before, after):
+    """The energy [J] friction took at the free bodies over a step: at each grip closed at both
+    ends ``-f_t . slip``, ``f_t`` the force on the rod and the slip its point's motion relative to
+    the body's material point under it at the start (``x_{n+1} - r_{n+1} - R_{n+1} R_n^T (x_n -
+    r_n)``); at each corner pressed at both ends ``-F_t . (y_{n+1} - y_n)``, ``F_t`` the support's
+    force on the body."""
+    was, work = {body.name: body for body in before.bodies}, 0.0
+    for body in after.bodies:
+        start = was.get(body.name)
+        if start is None:
+            continue
+        gripped = {(c.module, c.s): c.position for c in start.grips}
+        for c in body.grips:
+            if (c.module, c.s) in gripped:
+                under = body.position + body.rotation @ start.rotation.T @ (gripped[c.module, c.s] - start.position)
+                work -= float(c.tangential_force @ (c.position - under))
+        if body.corners is not None and start.corners is not None:
+            both = body.corners.pressed & start.corners.pressed
+            moved = body.corners.positions - start.corners.positions
+            work -= float(np.sum(body.corners.tangential_forces[both] * moved[both]))
+    return work
 
 
 def _load_work(robot, before, after, during=None):

@@ -317,6 +317,8 @@ class TimeSimulation:
                 series.message = f"stopped at t = {series.t[k]:g} s: {str(exc).split(': ', 1)[1]}"
                 return
             for name in picked:
+                if name in tracker.free:            # a free body's grasp is solved for: it holds or slips
+                    continue
                 angle = tracker.grip_angle(solution, name)
                 if angle is not None and abs(angle - 90.0) > GRIP_ANGLE_TOLERANCE:
                     series.warnings.append(PhysicsWarning("grasp", f"t = {series.t[k]:g} s: the gripper closes on "
@@ -432,10 +434,11 @@ class TimeSimulation:
         for name, entry in report["objects"].items():
             picked = ", ".join(f"{t:g}" for t in entry["picked_at"]) or ("held from the start" if entry["held_at_start"]
                                                                        else "never")
-            down = ", ".join(f"{t:g}" for t in entry["put_down_at"]) or "never"
+            down = ", ".join(f"{t:g}" for t in entry["put_down_at"])
+            down = f"put down at {down} s" if down else "never put down"
             centre = " ".join(f"{v * 1e3:+.2f}" for v in entry["final_center"])
-            picked = picked if picked.startswith("held") else f"picked at {picked} s"
-            lines.append(f"  {name}: {picked}, put down at {down} s; ends at [{centre}] mm")
+            picked = picked if picked.startswith("held") or picked == "never" else f"picked at {picked} s"
+            lines.append(f"  {name}: {picked}, {down}; ends at [{centre}] mm")
         if report["dynamics"] is not None:
             motion = report["dynamics"]
             lines.append(f"  dynamics ({motion['integrator']}): peak tip speed {motion['peak_tip_speed'] * 1e3:.4g} mm/s, "

@@ -84,7 +84,8 @@ def test_dotted_paths_in_examples_exist():
         scenario = load_scenario(path, allow_code=True)
         names |= {m.name for m in scenario.modules} | {load.name for load in scenario.loads}
         names |= {o.name for o in scenario.objects}
-    names |= {"name", "gravity", "base", "solver", "materials", "tca_types"}
+    from tca_casadi.scenario.schema import Scenario
+    names |= set(Scenario.model_fields)                      # the top-level keys
     pages = [README] + [page.read_text() for page in (ROOT / "docs").rglob("*.md")]
     used = re.findall(r"--(?:set|param) \"?([A-Za-z_][\w]*)\.", "\n".join(pages))
     assert used and set(used) <= names, set(used) - names

@@ -1,0 +1,98 @@
+"""Free rigid bodies with inertia in rod dynamics (issue 33): a block on an incline slides at
+``g (sin theta - mu cos theta)`` when ``tan theta > mu`` and stays when ``tan theta < mu``; the
+energy friction takes is ``mu N`` times the distance; a grasped cube slips out of its grip when
+the hand's lift accelerates past ``mu N_total / m - g`` (the threshold read from the grip
+forces); an impact is perfectly inelastic (no rebound)."""
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from conftest import SCENARIOS
+from tca_casadi import Simulation
+from tca_casadi.time_simulation.motion import ENERGY_COLUMNS
+from tca_casadi.time_simulation.timeline import TimeSimulation
+
+INCLINE = SCENARIOS / "analytic" / "block_on_incline.yaml"
+LIFT = SCENARIOS / "analytic" / "pinch_lift.yaml"
+MU, G, MASS, DT = 0.3, 9.81, 0.01, 0.005
+
+
+def _gravity(tangent):
+    """The tilted gravity [m/s^2] of an incline with ``tan theta = tangent``, as a YAML list."""
+    theta = np.arctan(tangent)
+    return f"[{float(G * np.sin(theta))!r}, 0, {float(-G * np.cos(theta))!r}]"
+
+
+def _run(scenario, settings, dt):
+    series = TimeSimulation(Simulation.from_file(scenario, settings), dt=dt).run()
+    assert series.completed, series.message
+    return series
+
+
+@pytest.mark.parametrize("tangent", [0.35, 0.6])
+def test_a_block_tilted_past_its_friction_slides_at_g_sin_minus_mu_cos(tangent):
+    """The incline tilts at t = 0 (from a block at rest on a level table): the block's
+    acceleration, from its velocity at the last steps (BDF2 is exact for uniform acceleration
+    once the first, implicit Euler, step's transient has died), is ``g (sin - mu cos)`` to 1e-6;
+    the energy friction took is ``mu N`` times the distance slid (1e-6), and what the account
+    misses is the first step's ``m (h a)^2 / 2`` (implicit Euler's own dissipation) and no more."""
+    theta = np.arctan(tangent)
+    series = _run(INCLINE, [f"timeline=[{{at: 0 s, set: {{gravity: {_gravity(tangent)}}}}}]"], DT)
+    velocity = np.array([view.body_velocity() for view in series.views])
+    expected = G * (np.sin(theta) - MU * np.cos(theta))
+    assert_allclose((velocity[-1] - velocity[-2]) / DT, [expected, 0, 0], rtol=0, atol=1e-6 * expected)
+    assert series.views[-1].bodies[0].corners.sliding.any()
+    travelled = series.views[-1].bodies[0].position[0] - series.views[0].bodies[0].position[0]
+    energies = dict(zip(ENERGY_COLUMNS, series.energies[-1]))
+    assert_allclose(energies["friction_work"], MU * MASS * G * np.cos(theta) * travelled, rtol=1e-6)
+    assert np.all(np.diff(series.energies[:, ENERGY_COLUMNS.index("friction_work")]) >= 0)
+    assert_allclose(energies["kinetic_energy"], 0.5 * MASS * velocity[-1] @ velocity[-1], rtol=1e-12)
+    first_step = 0.5 * MASS * (DT * expected) ** 2
+    assert -2 * first_step < energies["energy_balance"] < 0
+
+
+@pytest.mark.parametrize("tangent", [0.25, 0.29])
+def test_a_block_on_an_incline_within_its_friction_stays(tangent):
+    """Placed on the incline (a static start there), it does not move: every step's velocity
+    below 1e-9 m/s, its support carrying its weight with friction ``tan theta`` of the normal
+    force in all (a lightly loaded corner may reach its cone and slip within its compliance)."""
+    series = _run(INCLINE, [f"gravity={_gravity(tangent)}", "timeline=[]"], DT)
+    speeds = [np.linalg.norm(view.body_velocity()) for view in series.views]
+    assert max(speeds) < 1e-9
+    corners = series.views[-1].bodies[0].corners
+    normal, tangential = corners.normal_forces.sum(), corners.tangential_forces.sum(axis=0)
+    assert_allclose(np.hypot(normal, np.linalg.norm(tangential)), MASS * G, rtol=1e-9)
+    assert_allclose(np.linalg.norm(tangential) / normal, tangent, rtol=1e-9)
+
+
+def test_a_cube_slips_out_of_its_grip_when_the_lift_accelerates_past_mu_n_over_m_minus_g():
+    """The hand's lift accelerates ever faster (gravity g + a in its frame, a ramped 0 to 8
+    m/s^2 over 0.5 s: slow against the fingers' motion). The cube first slides at the step where
+    ``a`` passes the threshold ``mu N_total / m - g`` read from the grip forces just before
+    (2 %), and falls; until then it moves with the hand."""
+    settings = ["duration=0.7", "timeline=[{at: 0 s, set: {obstacles.table.position: [0, 0, -50 mm]}, ramp: 0.02 s},"
+                " {at: 0.1 s, set: {gravity: [0, 0, -17.81]}, ramp: 0.5 s}]"]
+    series = _run(LIFT, settings, 0.002)
+    blocks = [view.bodies[0] for view in series.views]
+    sliding = [any(c.sliding for c in block.grips) for block in blocks]
+    k = sliding.index(True)
+    lift = [-view.parameters[view.parameter_names["gravity"]][2] - G for view in series.views]
+    threshold = 0.5 * blocks[k - 1].grip_force / 1e-4 - G
+    assert lift[k - 1] < threshold * 1.02 and lift[k] > threshold * 0.98
+    assert 4 < threshold < 6                                                   # [m/s^2] (5.24)
+    assert max(abs(blocks[j].position[2] - blocks[0].position[2]) for j in range(k)) < 5e-6     # [m]
+    assert blocks[-1].position[2] < blocks[0].position[2] - 5e-3 and blocks[-1].grip_force == 0   # dropped
+
+
+def test_a_dropped_cube_lands_without_rebound():
+    """The shipped fast lift (8 m/s^2): the cube slips, falls 7.5 mm onto the table and stays
+    there: the impact is perfectly inelastic (no rebound above 1 um, no speed left), where a
+    two-step rule straddling it threw the cube back up at 0.1 m/s (RESTART_STEPS)."""
+    series = _run(LIFT, ["timeline.1.set.gravity=[0, 0, -17.81]"], 0.002)
+    heights = np.array([view.bodies[0].position[2] for view in series.views])
+    resting = -0.05 + 0.0045
+    landed = int(np.argmax(heights < resting + 1e-6))
+    assert landed > 0
+    assert np.max(heights[landed:]) < resting + 1e-6
+    assert abs(series.views[-1].body_velocity()[2]) < 1e-9
+    assert max(series.checked_balances()) < 1e-8
