@@ -101,13 +101,16 @@ def _bodies(moved, gripped, t, outputs, names, n):
 
 def _energies(axis, t, energies, n):
     """A dynamic run's energy account [mJ]: kinetic, elastic, gravitational (from its start),
-    the actuators' and loads' work, what damping dissipated, the impact loss and friction's
-    work (where there was any) and the balance (zero up to the time discretisation)."""
+    the actuators' and loads' work, what damping dissipated, the impact loss, friction's work
+    and implicit Euler's loss (where any is above 1e-9 of the largest value shown) and the
+    balance (zero up to the time discretisation)."""
     from ..time_simulation.motion import ENERGY_COLUMNS
     shown = energies * 1e3
     shown[:, ENERGY_COLUMNS.index("gravitational_energy")] -= shown[0, ENERGY_COLUMNS.index("gravitational_energy")]
+    largest = np.max(np.abs(shown)) if shown.size else 0.0
     for k, name in enumerate(ENERGY_COLUMNS):
-        if name in ("impact_loss", "friction_work") and not np.any(shown[:, k]):    # no contact, no friction
+        if name in ("impact_loss", "friction_work", "integrator_loss") and not (
+                np.max(np.abs(shown[:, k])) > 1e-9 * largest):        # no contact, no friction, no impact
             continue
         style = dict(line_style(k, n), color="black") if name == "energy_balance" else line_style(k, n)
         axis.plot(t, shown[:, k], label=name.replace("_", " ") + (" (from t0)" if name.startswith("grav") else ""),

@@ -350,6 +350,8 @@ class StepState:
     bodies: np.ndarray = None
     #: how many more steps from it restart the integrator (its first step's rule: an impact)
     restart: int = 0
+    #: whether the step that reached it was implicit Euler's (its own dissipation accounted)
+    implicit_euler: bool = False
 
 
 class RodDynamics:
@@ -433,13 +435,14 @@ class RodDynamics:
         c0, histories = self._coefficients(h, restarting)
         full = self.solver.parameters(solved_at, c0, self.damping, histories)
         w, status = self._solve(now, solved_at, full, c0, histories, self._predicted(now.t + scheme.fraction * h))
+        rule = scheme.first() if restarting else scheme
         if status.success and not restarting and self._closes(now.w, w):
             # an impact: its step by the first-step rule too (RESTART_STEPS)
             c0, histories = self._coefficients(h, True)
             first = self.solver.parameters(solved_at, c0, self.damping, histories)
             again, again_status = self._solve(now, solved_at, first, c0, histories, w)
             if again_status.success:
-                w, status, full = again, again_status, first
+                w, status, full, rule = again, again_status, first, scheme.first()
         self._lu = self.solver.square.last_lu           # chord steps of the next step start on it
         self.last_status = status
         if not status.success:
@@ -453,6 +456,7 @@ class RodDynamics:
         state = StepState(now.t + h, self.solver.node_values(w), w, params, full=full, status=status, solved=solved,
                           previous=now, bodies=self.solver.body_values(w, full))
         state.restart = RESTART_STEPS if self._closes(now.w, w) else max(now.restart - 1, 0)
+        state.implicit_euler = isinstance(rule, ImplicitEuler)
         if len(self.states) == 2:          # it leaves the window: its nodes follow from w when asked
             self.states[0].nodes = self.states[0].solution = None
         self.states = (self.states + [state])[-2:]
@@ -734,6 +738,38 @@ class RodDynamics:
             kinetic += kinetic_energy(mass, box_moments(body.size, mass), value[6:9], value[9:12])
             potential -= mass * float(gravity @ (body.position + value[0:3]))
         return kinetic, potential
+
+    def euler_loss(self, previous, state):
+        """The energy [J] implicit Euler's own damping took over the step from ``previous`` to
+        ``state``: ``1/2 int (rho A |dq|^2 + dw . rho J dw + dxi . K dxi) ds`` over the rods,
+        ``1/2 (m |dv|^2 + d omega . J d omega)`` over the free bodies and ``1/2 M |d(q + w x c)|^2``
+        over the rigid point masses (``d`` the step's change). With ``x_t = (x_{n+1} - x_n) / h``
+        a force that does ``F . x_t`` of work per time puts ``d(x . x) / 2h + |dx|^2 / 2h`` into a
+        quadratic store: the second term is this loss (``docs/dynamics.md``)."""
+        total = 0.0
+        pairs = zip(self.nodes_of(previous), self.nodes_of(state), self.sections(state.params))
+        for (dev_a, vel_a), (dev_b, vel_b), (mass, rotary, stiffness, weights) in pairs:
+            change, strain = vel_b - vel_a, dev_b - dev_a
+            density = (kinetic_energy_density(change[0:3], change[3:6], mass, rotary)
+                       + elastic_energy_density(stiffness, strain))
+            total += float(density @ weights)
+        if state.bodies is not None:
+            param = self.sim.robot.param_function(state.params)
+            for body, a, b in zip(self.sim.robot.bodies, previous.bodies.T, state.bodies.T):
+                mass = float(param(f"{body.name}.mass")[0])
+                total += kinetic_energy(mass, box_moments(body.size, mass), b[6:9] - a[6:9], b[9:12] - a[9:12])
+        if self._rigid_masses:
+            speeds = [self._rigid_speeds(x) for x in (previous, state)]
+            total += sum(0.5 * mass * float(np.sum((b - a) ** 2)) for (mass, a), (_, b) in zip(*speeds))
+        return total
+
+    def _rigid_speeds(self, state):
+        """``[(mass, q + w x c (3,) in its section's frame)]`` of the rigid point masses at ``state``."""
+        full = self.solver.parameters(state.params, 0.0, self.damping,
+                                      [np.zeros((12, x[0].shape[1])) for x in self.nodes_of(state)])
+        frame = lambda m, column: (np.zeros(3), np.eye(3))          # noqa: E731 (velocities need no frame)
+        return [(mass, q + np.cross(w, np.zeros(3) if offset is None else np.asarray(offset, float)))
+                for mass, offset, (q, w, _, _), _, _ in self.solver.rigid_points(state.w, full, frame)]
 
     def energies(self, state, params):
         """``(kinetic, elastic)`` [J] of the rods at ``state`` (Gauss quadrature on the nodes)."""

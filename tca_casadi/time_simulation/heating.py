@@ -85,8 +85,9 @@ class TimeSeries(ResultAPI):
         if getattr(self, "energies", None) is not None:          # a dynamic run
             from .motion import ENERGY_COLUMNS
             columns += ["tip_vx [m/s]", "tip_vy [m/s]", "tip_vz [m/s]"] + [f"{name} [J]" for name in ENERGY_COLUMNS]
-        for name in (self.objects[0] if self.objects else {}):
-            columns += [f"{name}.held", f"{name}.x [m]", f"{name}.y [m]", f"{name}.z [m]"]
+        free = self._free_bodies()
+        for name in (self.objects[0] if self.objects else {}):          # a free body's centre is a contact column
+            columns += [f"{name}.held"] + ([] if name in free else [f"{name}.x [m]", f"{name}.y [m]", f"{name}.z [m]"])
         columns += list(self.outputs[0].contact_columns()) if self.solutions else []
         return columns + ["converged"]
 
@@ -94,7 +95,7 @@ class TimeSeries(ResultAPI):
         """``timeseries.csv`` rows: t, per TCA temperature, power (empty where not heated),
         tension, stroke; the voltage or current of TCAs on such drives; the tip position and quaternion; each object's held flag and centre;
         each obstacle's normal force and clearance; converged."""
-        out = []
+        out, free = [], self._free_bodies()
         for k, solution in enumerate(self.outputs):
             row = [f"{self.t[k]:.10g}"]
             for j, key in enumerate(self.keys):
@@ -106,11 +107,15 @@ class TimeSeries(ResultAPI):
             row += [f"{v:.10g}" for v in matrix_to_quaternion(solution.tip_rotation)]
             if getattr(self, "energies", None) is not None:
                 row += [f"{v:.10g}" for v in self.tip_velocities[k]] + [f"{v:.10g}" for v in self.energies[k]]
-            for pose in (self.objects[k].values() if self.objects else ()):
-                row += [int(pose.held)] + [f"{v:.10g}" for v in pose.center]
+            for name, pose in (self.objects[k].items() if self.objects else ()):
+                row += [int(pose.held)] + ([] if name in free else [f"{v:.10g}" for v in pose.center])
             row += [f"{v:.10g}" for v in solution.contact_columns().values()]     # per obstacle
             out.append(row + [int(solution.converged)])
         return out
+
+    def _free_bodies(self):
+        """The names of the free bodies (contact objects), whose pose the contact columns hold."""
+        return {body.name for body in getattr(self.outputs[0], "bodies", None) or []} if self.solutions else set()
 
     def to_csv(self, path):
         """Write ``timeseries.csv`` (atomically); return its path."""

@@ -14,13 +14,16 @@ trapezoidal rule, ``xi_t`` as ``(xi_{n+1} - xi_n) / h``), and with obstacles the
 the work the contact forces take: per step ``sum_k f_k,n+1 (g_k,n - g_k,n+1) >= 0`` (the
 implicit step's contact force acts at its end; ``docs/contact.md`` section 5a), and with
 friction the energy friction took, ``-sum f_t . (x_{n+1} - x_n)`` over the contacts (their
-points' slip over the step). Their balance
+points' slip over the step), and on the steps implicit Euler takes (BDF2's first, and the
+steps of an impact) its own damping, ``|x_{n+1} - x_n|^2 / 2`` in every quadratic store
+(:meth:`RodDynamics.euler_loss <tca_casadi.solvers.dynamics.RodDynamics.euler_loss>`). Their
+balance
 
     (kinetic + elastic + gravitational)(t) - (...)(0) + dissipated + impact loss + friction work
-        - actuator work - load work
+        + integrator loss - actuator work - load work
 
-is zero up to the time discretisation (and the numerical damping of BDF2, which at an impact
-holds the rest of the inelastic loss), reported per output as ``energy_balance``.
+is zero up to the time discretisation (BDF2's own damping on its other steps), reported per
+output as ``energy_balance``.
 """
 from collections.abc import Sequence
 
@@ -36,7 +39,7 @@ STEP_RANGE = (1e-7, 0.1)
 #: a step that does not converge is halved at most this many times
 HALVINGS = 6
 ENERGY_COLUMNS = ("kinetic_energy", "elastic_energy", "gravitational_energy", "actuator_work", "load_work",
-                  "dissipated_energy", "impact_loss", "friction_work", "energy_balance")
+                  "dissipated_energy", "impact_loss", "friction_work", "integrator_loss", "energy_balance")
 
 
 def damping_of(config, scenario):
@@ -69,7 +72,7 @@ class EnergyAccount:
         self.dynamics = dynamics
         self.rows = []
         self._work = {"actuator_work": 0.0, "load_work": 0.0, "dissipated_energy": 0.0, "impact_loss": 0.0,
-                      "friction_work": 0.0}
+                      "friction_work": 0.0, "integrator_loss": 0.0}
         self._start = None
 
     def stored(self, state, solution):
@@ -107,6 +110,8 @@ class EnergyAccount:
             self._work["impact_loss"] += _support_impact_loss(previous_solution, solution)
             self._work["friction_work"] += _friction_work(previous_solution, solution)
             self._work["friction_work"] += _body_friction_work(previous_solution, solution)
+            if state.implicit_euler:
+                self._work["integrator_loss"] += self.dynamics.euler_loss(previous, state)
         stored, rigid = self.stored(state, solution)
         if previous is not None:
             self._work["load_work"] += self._field_work(previous, state, previous_solution, solution)
@@ -117,10 +122,9 @@ class EnergyAccount:
         if self._start is None:
             self._start = sum(stored)
         balance = (sum(stored) - self._start + self._work["dissipated_energy"] + self._work["impact_loss"]
-                   + self._work["friction_work"] - self._work["actuator_work"] - self._work["load_work"])
-        self.rows.append((*stored, self._work["actuator_work"], self._work["load_work"],
-                          self._work["dissipated_energy"], self._work["impact_loss"], self._work["friction_work"],
-                          balance))
+                   + self._work["friction_work"] + self._work["integrator_loss"] - self._work["actuator_work"]
+                   - self._work["load_work"])
+        self.rows.append((*stored, *(self._work[name] for name in ENERGY_COLUMNS[3:-1]), balance))
 
     def _field_work(self, previous, state, before, after):
         """The work [J] of a change of gravity over a step (a lift's acceleration is one, in its
@@ -275,7 +279,7 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
     ``dynamics.balance_every`` steps and the last: those steps' Solutions are built as the run
     goes, the others' only when asked (:class:`StepSolutions`; ``series.views`` holds every
     output's :class:`~tca_casadi.solvers.dynamics.StepOutputs`). Adds ``series.tip_velocities``
-    (n, 3) [m/s] and ``series.energies`` (n, 7) [J] (:data:`ENERGY_COLUMNS`)."""
+    (n, 3) [m/s] and ``series.energies`` (n, 10) [J] (:data:`ENERGY_COLUMNS`)."""
     config = sim.scenario.dynamics
     base = sim.params.copy()
     try:

@@ -35,7 +35,8 @@ def test_a_block_tilted_past_its_friction_slides_at_g_sin_minus_mu_cos(tangent):
     acceleration, from its velocity at the last steps (BDF2 is exact for uniform acceleration
     once the first, implicit Euler, step's transient has died), is ``g (sin - mu cos)`` to 1e-6;
     the energy friction took is ``mu N`` times the distance slid (1e-6), and what the account
-    misses is the first step's ``m (h a)^2 / 2`` (implicit Euler's own dissipation) and no more."""
+    takes as implicit Euler's own dissipation is its first step's ``m (h a)^2 / 2``, and the
+    balance closes to 1e-3 of the energy released."""
     theta = np.arctan(tangent)
     series = _run(INCLINE, [f"timeline=[{{at: 0 s, set: {{gravity: {_gravity(tangent)}}}}}]"], DT)
     velocity = np.array([view.body_velocity() for view in series.views])
@@ -47,8 +48,12 @@ def test_a_block_tilted_past_its_friction_slides_at_g_sin_minus_mu_cos(tangent):
     assert_allclose(energies["friction_work"], MU * MASS * G * np.cos(theta) * travelled, rtol=1e-6)
     assert np.all(np.diff(series.energies[:, ENERGY_COLUMNS.index("friction_work")]) >= 0)
     assert_allclose(energies["kinetic_energy"], 0.5 * MASS * velocity[-1] @ velocity[-1], rtol=1e-12)
-    first_step = 0.5 * MASS * (DT * expected) ** 2
-    assert -2 * first_step < energies["energy_balance"] < 0
+    # the block's share, and the steel post's: it bends under the tilted gravity in that step
+    # too, at most its elastic energy (3e-10 of 7e-10 J)
+    post = energies["integrator_loss"] - 0.5 * MASS * (DT * expected) ** 2
+    assert 0 <= post <= energies["elastic_energy"]
+    released = energies["gravitational_energy"] - series.energies[0, ENERGY_COLUMNS.index("gravitational_energy")]
+    assert abs(energies["energy_balance"]) < 1e-3 * abs(released)
 
 
 @pytest.mark.parametrize("tangent", [0.25, 0.29])
