@@ -124,14 +124,29 @@ class DynamicSolver(CollocationSolver):
         """The gaps [m] (grips,) of the grip candidates (``robot.grips``) to their bodies at the
         poses in ``w_phys``, at the centrelines' nearest nodes."""
         robot, nlp = self.robot, self.nlp
-        shapes = [body_shape(body, *body_pose(body, w_phys[nlp.pose_index[body.index]])) for body in robot.bodies]
         out = []
         for c in robot.grips:
             line = modules[c.module]
             k = int(np.argmin(np.abs(line.s - c.s)))
-            out.append(float(gaps(shapes[c.body], outline_of(robot.modules[c.module]), line.p[:, k:k + 1],
-                                  line.h[:, k:k + 1])[0]))
+            function = self._grip_gap_function(c.body, c.module)
+            out.append(float(function(line.p[:, k], line.h[:, k], w_phys[nlp.pose_index[c.body]])))
         return np.array(out)
+
+    def _grip_gap_function(self, b, m):
+        """CasADi Function ``(p (3,), h (4,), pose (6,)) -> gap [m]`` of module m's outline at a
+        centreline point against body b at its pose unknowns (built once: a body moves at every
+        step, and a gap function per pose would be built anew each time)."""
+        cache = self.__dict__.setdefault("_grip_gap_functions", {})
+        if (b, m) not in cache:
+            import casadi as ca
+            from ..model.contact import gap
+            from ..model.rotations import rotation_matrix
+            p, h, pose = ca.SX.sym("p", 3), ca.SX.sym("h", 4), ca.SX.sym("pose", 6)
+            body = self.robot.bodies[b]
+            g, _ = gap(body_shape(body, *body_pose(body, pose)), outline_of(self.robot.modules[m]), p,
+                       rotation_matrix(h))
+            cache[b, m] = ca.Function("grip_gap", [p, h, pose], [g])
+        return cache[b, m]
 
     def _gaps(self, shapes, modules):
         """``(gaps (contacts,) [m] at the contact candidates, {obstacle: nearest approach [m]
