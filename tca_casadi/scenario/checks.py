@@ -73,7 +73,13 @@ def _check_bodies(scenario, raw, sources):
 
 
 def _check_timeline(scenario, raw, sources):
-    """Events in time order, inside ``duration``, each ramp over before the next event."""
+    """Events in time order, inside ``duration``, each ramp over before the next event; a
+    dynamic run's ``start_after`` names a sequence step."""
+    start = scenario.dynamics.start_after
+    names = [step.name for step in scenario.sequence or []]
+    if start is not None and start not in names:
+        fail(raw, sources, ("dynamics", "start_after"),
+             f"no sequence step {start!r}" + (closest(start, names) if names else ": the scenario has no sequence"))
     events = scenario.timeline
     for k, event in enumerate(events):
         if scenario.duration is not None and event.at > scenario.duration:

@@ -729,11 +729,14 @@ class Dynamics(Strict):
     """``simulate`` with the rods' inertia (issue 16): ``enabled``, the ``integrator``
     (``bdf2`` or ``midpoint``), optional ``damping``, and how often the global force and
     moment balance (inertial loads included) is checked: every ``balance_every`` steps, the
-    first and the last (1: every step)."""
+    first and the last (1: every step). ``start_after``: the name of a ``sequence`` step; the
+    run starts at rest in the state the sequence reaches there (its steps solved in order, as
+    ``sequence`` does: a grasp with its friction history), with that step's values."""
     enabled: bool = False
     integrator: Literal["bdf2", "midpoint"] = "bdf2"
     damping: Optional[Damping] = None
     balance_every: Annotated[int, Field(ge=1)] = 25
+    start_after: Optional[str] = None
 
 
 class Scenario(Strict):

@@ -116,8 +116,12 @@ class EnergyAccount:
         if previous is not None:
             self._work["load_work"] += self._field_work(previous, state, previous_solution, solution)
         if previous is not None and not np.array_equal(solution.parameters, previous_solution.parameters):
-            # a point mass that changed (an object let go or taken) takes or brings its energy
-            kept = self.dynamics.rigid_energies(state, solution, previous_solution.parameters)
+            # a point mass that changed (an object let go or taken) takes or brings its energy (at
+            # this step's gravity: a change of gravity is the field's work above)
+            masses = np.array(previous_solution.parameters, float)
+            index = self.dynamics.sim.robot.layout["gravity"]
+            masses[index] = np.asarray(solution.parameters, float)[index]
+            kept = self.dynamics.rigid_energies(state, solution, masses)
             self._work["load_work"] += rigid - sum(kept)
         if self._start is None:
             self._start = sum(stored)
@@ -269,11 +273,11 @@ class StepSolutions(Sequence):
         return [item for item in self._items if not isinstance(item, StepState)]
 
 
-def follow_dynamics(sim, series, path, progress=None, initial=None):
+def follow_dynamics(sim, series, path, progress=None, initial=None, start=None):
     """Fill ``series`` (a TimeSeries) with the motion at the parameter vectors ``path`` (one per
     output time, each step's parameters running from one to the next): the static equilibrium
     at ``initial`` (default ``path[0]``; the parameters before an event at the first output
-    time), then one implicit step per output time
+    time; or ``start``, a Solution given, as a sequence's step), then one implicit step per output time
     (halved up to :data:`HALVINGS` times when Newton fails: the run stops, with the solutions
     up to there, when even that fails). The global balance is checked at the first step, every
     ``dynamics.balance_every`` steps and the last: those steps' Solutions are built as the run
@@ -281,12 +285,7 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
     output's :class:`~tca_casadi.solvers.dynamics.StepOutputs`). Adds ``series.tip_velocities``
     (n, 3) [m/s] and ``series.energies`` (n, 10) [J] (:data:`ENERGY_COLUMNS`)."""
     config = sim.scenario.dynamics
-    base = sim.params.copy()
-    try:
-        sim.params = np.array(path[0] if initial is None else initial, float)
-        first = sim.solve(warn=False)
-    finally:
-        sim.params = base
+    first = start if start is not None else _static_start(sim, path[0] if initial is None else initial)
     if not first.converged:
         series.message = f"no equilibrium at t = {series.t[0]:g} s: {first.message}"
         return series
@@ -322,6 +321,16 @@ def follow_dynamics(sim, series, path, progress=None, initial=None):
     if series.completed:
         series.message = f"stepped {len(series.t) - 1} times (dynamics, {config.integrator})"
     return series
+
+
+def _static_start(sim, params):
+    """The static equilibrium at ``params`` (a dynamic run's start at rest)."""
+    base = sim.params.copy()
+    try:
+        sim.params = np.array(params, float)
+        return sim.solve(warn=False)
+    finally:
+        sim.params = base
 
 
 def _advance(dynamics, start, end, h):

@@ -190,6 +190,11 @@ class TimeSimulation:
             raw, sources = sim.scenario.model_dump(mode="json"), None
         structure = sim.robot.structure_key(sim.scenario)
         states = [(sim.scenario, sim.params.copy())]
+        if self.start_steps:            # the run starts where the sequence's steps took it
+            for step in self.start_steps:
+                raw = apply_overrides(raw, step.set, sources, label=f"sequence step {step.name!r}:")
+            scenario = validate(raw, sources) if sources is not None else type(sim.scenario).model_validate(raw)
+            states = [(scenario, sim.robot.parameter_vector(scenario))]
         for k, event in enumerate(sim.scenario.timeline):
             try:
                 raw = apply_overrides(raw, event.set, sources)
@@ -200,8 +205,19 @@ class TimeSimulation:
                 raise ScenarioError(f"timeline[{k}] (at {event.at:g} s): {', '.join(event.set)} changes the robot's "
                                     "structure; a timeline may only set parameters and drive values")
             states.append((scenario, self._with_set_temperatures(scenario, sim.robot.parameter_vector(scenario))))
-        states[0] = (sim.scenario, self._with_set_temperatures(sim.scenario, states[0][1]))
+        states[0] = (states[0][0], self._with_set_temperatures(states[0][0], states[0][1]))
         return states
+
+    @property
+    def start_steps(self):
+        """The sequence steps a dynamic run starts after (``dynamics.start_after``): the
+        scenario's ``sequence`` up to that step, or none."""
+        scenario = self.sim.scenario
+        start = scenario.dynamics.start_after if scenario.dynamics.enabled else None
+        if start is None:
+            return []
+        names = [step.name for step in scenario.sequence]
+        return list(scenario.sequence[:names.index(start) + 1])
 
     def _with_set_temperatures(self, scenario, params):
         """``params`` with each ``kind: temperature`` drive's value as its TCA's temperature."""
@@ -281,11 +297,29 @@ class TimeSimulation:
             initial = self.parameters_at(times[0], left=True)       # at rest before any event at t = 0
             for j, actuator in enumerate(self.heated):
                 initial[layout[actuator.parameter]] = history.temperature[0, j]
-            follow_dynamics(self.sim, series, path, progress, initial)
+            start = self._sequence_start(series) if self.start_steps else None
+            if not self.start_steps or start is not None:
+                follow_dynamics(self.sim, series, path, progress, initial, start=start)
         else:
             follow_parameters(self.sim, series, path, progress, careful=self._careful(times))
         self._track_objects(series)
         return series
+
+    def _sequence_start(self, series):
+        """The Solution the sequence reaches at ``dynamics.start_after`` (its steps solved in
+        order on a copy of the simulation's parameters), or None with ``series.message`` saying
+        which step did not converge."""
+        from ..studies.sequence import run_sequence
+        base = self.sim.params.copy()
+        try:
+            result = run_sequence(self.sim, self.start_steps)
+        finally:
+            self.sim.params = base
+        for name, solution in zip(result.names, result.solutions):
+            if not solution.converged:
+                series.message = f"no start: sequence step {name!r} did not converge ({solution.message})"
+                return None
+        return result.solutions[-1]
 
     def _careful(self, times):
         """Outputs that take a full continuation step: the first one at or after each event

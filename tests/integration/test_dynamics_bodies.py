@@ -101,3 +101,27 @@ def test_a_dropped_cube_lands_without_rebound():
     assert np.max(heights[landed:]) < resting + 1e-6
     assert abs(series.views[-1].body_velocity()[2]) < 1e-9
     assert max(series.checked_balances()) < 1e-8
+
+
+def test_a_dynamic_run_starts_after_a_sequence_step_in_its_state():
+    """``dynamics.start_after``: the free pinch squeezes its cube and lifts it by a sequence
+    (friction's history carried step by step, as ``sequence`` does); rod dynamics starts there
+    at rest and, with nothing changing, stays: the cube hangs on its grips where the sequence
+    left it (1e-12 m), every step's velocity below 1e-9 m/s. A step name the sequence lacks is
+    one line naming the key."""
+    from tca_casadi.errors import ScenarioError
+    pinch = SCENARIOS / "analytic" / "free_pinch.yaml"
+    steps = ("sequence=[{name: squeeze, set: {squeeze_left.force: [2 mN, 0, 0], squeeze_right.force: [-2 mN, 0, 0]}},"
+             " {name: lift, set: {base.position: [0, 0, 2 mm]}}]")
+    sequence = Simulation.from_file(pinch, [steps])
+    from tca_casadi.studies.sequence import run_sequence
+    lifted = run_sequence(sequence).solutions[-1].bodies[0]
+    assert lifted.grip_force > 0 and not lifted.resting
+    settings = [steps, "contact.friction_law=coulomb", "dynamics={enabled: true, start_after: lift}", "duration=0.02"]
+    series = _run(pinch, settings, 0.002)
+    cube = [view.bodies[0] for view in series.views]
+    assert_allclose([c.position for c in cube], np.tile(lifted.position, (len(cube), 1)), rtol=0, atol=1e-12)
+    assert max(np.linalg.norm(view.body_velocity()) for view in series.views) < 1e-9
+    with pytest.raises(ScenarioError, match="dynamics.start_after: no sequence step 'lfit'") as caught:
+        Simulation.from_file(pinch, settings[:-1] + ["dynamics.start_after=lfit"])
+    assert "\n" not in str(caught.value)
