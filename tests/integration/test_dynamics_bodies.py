@@ -125,3 +125,43 @@ def test_a_dynamic_run_starts_after_a_sequence_step_in_its_state():
     with pytest.raises(ScenarioError, match="dynamics.start_after: no sequence step 'lfit'") as caught:
         Simulation.from_file(pinch, settings[:-1] + ["dynamics.start_after=lfit"])
     assert "\n" not in str(caught.value)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_random_pinches_in_motion_obey_newtons_law(seed):
+    """Random pinches (modulus, finger size, block mass and size, friction, unequal squeezes, a
+    lift's acceleration up to 2 m/s^2): the table drops away and the lift starts. At every step
+    the robot balances globally with the grips' forces (1e-8) and the block's equilibrium with
+    its d'Alembert force closes (1e-12 N); and, independently, the block's acceleration from its
+    velocities by BDF2's own rule, ``(3 v_{n+1} - 4 v_n + v_{n-1}) / 2h``, times its mass is the
+    force on it (weight, grips, support) to 1e-6 of its weight."""
+    import yaml
+    rng = np.random.default_rng(seed)
+    with open(SCENARIOS / "analytic" / "pinch_lift.yaml") as handle:
+        raw = yaml.safe_load(handle)
+    raw["materials"]["rubber"]["youngs_modulus"] = float(rng.uniform(8e6, 15e6))
+    diameter = float(rng.uniform(1.8e-3, 2.2e-3))
+    half = 6e-3 - diameter / 2 - float(rng.uniform(0.3e-3, 0.5e-3))
+    for module in raw["modules"][1:]:
+        module["cross_section"]["diameter"] = diameter
+    mass = float(rng.uniform(0.05e-3, 0.1e-3))
+    raw["objects"][0].update(mass=mass, size=[2 * half, 0.009, 0.009], friction=float(rng.uniform(0.8, 1.2)))
+    squeeze = rng.uniform(2e-3, 3e-3, 2)
+    raw["loads"][0]["force"], raw["loads"][1]["force"] = [float(squeeze[0]), 0, 0], [float(-squeeze[1]), 0, 0]
+    lift = float(rng.uniform(0.5, 2.0))
+    raw["dynamics"]["balance_every"] = 1
+    raw.update(duration=0.06, timeline=[
+        {"at": 0.0, "set": {"obstacles.table.position": [0, 0, -0.05]}, "ramp": 0.02},
+        {"at": 0.02, "set": {"gravity": [0, 0, -(9.81 + lift)]}, "ramp": 0.03}])
+    h = 0.002
+    series = TimeSimulation(Simulation.from_file(raw), dt=h).run()
+    assert series.completed, series.message
+    assert max(series.checked_balances()) < 1e-8
+    blocks = [view.bodies[0] for view in series.views]
+    assert all(np.abs(b.residual_force).max() < 1e-12 and np.abs(b.residual_moment).max() < 1e-14 for b in blocks)
+    assert all(b.grips and not any(c.sliding for c in b.grips) for b in blocks)         # it holds
+    velocity = np.array([view.body_velocity() for view in series.views])
+    for k in range(2, len(blocks)):
+        acceleration = (3 * velocity[k] - 4 * velocity[k - 1] + velocity[k - 2]) / (2 * h)
+        force = blocks[k].weight + blocks[k].contact_force + blocks[k].support_force
+        assert_allclose(mass * acceleration, force, rtol=0, atol=1e-6 * mass * 9.81)
