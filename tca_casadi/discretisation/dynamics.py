@@ -31,7 +31,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ScenarioError
-from ..model.bodies import angular_velocity, body_rotation, box_moments, inertial_wrench
+from ..model.bodies import body_motion, body_rotation, box_moments, inertial_wrench
 from ..model.boundary import add, connector_of, loads_at
 from ..model.dynamics import inertia_per_length, inertial_loads, point_inertia, point_mass_of, velocity_rates
 from .collocation import CollocationNLP, _end_matrix
@@ -124,13 +124,11 @@ class DynamicCollocationNLP(CollocationNLP):
         at its pose unknowns ``pose`` (6,): its velocity ``v = c0 delta + h_delta``, the rate of
         its Gibbs vector ``g_t = c0 g + h_g`` and so its angular velocity ``omega(g, g_t)``, and
         their rates ``c0 v + h_v``, ``c0 omega + h_omega`` (``h`` the body's history)."""
-        c0 = self.P[self.c0_index]
         history = self.P[self.body_history_index[body.index].tolist()]
-        rate = c0 * pose + history[0:6]
-        omega = angular_velocity(pose[3:6], rate[3:6])
+        _, omega, acceleration, omega_rate = body_motion(self.P[self.c0_index], pose, history)
         mass = self.param(f"{body.name}.mass")[0]
-        return inertial_wrench(mass, box_moments(body.size, mass), body_rotation(body, pose[3:6]),
-                               c0 * rate[0:3] + history[6:9], omega, c0 * omega + history[9:12])
+        return inertial_wrench(mass, box_moments(body.size, mass), body_rotation(body, pose[3:6]), acceleration,
+                               omega, omega_rate)
 
     # ------------------------------------------------------------------ rigid point inertias
     def _motion_at(self, m, where):

@@ -270,6 +270,17 @@ def angular_velocity(g, rate):
     return (rate - 0.5 * cross(g, rate)) / (1 + g @ g / 4)
 
 
+def body_motion(c0, pose, history):
+    """``(v, omega, a, omega_t)`` (3,) each of a free body in a time step whose rates are
+    ``x_t = c0 x + h``: its velocity ``c0 delta + h_delta``, body-frame angular velocity
+    ``omega(g, c0 g + h_g)`` (:func:`angular_velocity`) and their rates ``c0 v + h_v``,
+    ``c0 omega + h_omega``, from its pose ``[delta, g]`` (6,) and its ``history`` (12,)
+    (numbers or symbols)."""
+    rate = c0 * pose[0:6] + history[0:6]
+    velocity, omega = rate[0:3], angular_velocity(pose[3:6], rate[3:6])
+    return velocity, omega, c0 * velocity + history[6:9], c0 * omega + history[9:12]
+
+
 def inertial_wrench(mass, moments, R, acceleration, omega, omega_rate):
     """The d'Alembert force [N] and moment about the centre [N m] (global frame) of a rigid box:
     ``-m a`` and ``-R (J omega_t + omega x J omega)`` (Euler's equations in the body frame;

@@ -17,7 +17,7 @@ import numpy as np
 from ..discretisation.dynamics import DynamicCollocationNLP
 from ..errors import ScenarioError
 from ..model.balance import load_markers
-from ..model.bodies import (CONTACT_UNKNOWNS, angular_velocity, body_pose, body_rotation, body_shape, box_moments,
+from ..model.bodies import (CONTACT_UNKNOWNS, body_motion, body_pose, body_rotation, body_shape, box_moments,
                              inertial_wrench, kinetic_energy)
 from ..model.contact import CLOSED, gaps, outline_of, outline_size
 from ..model.history import carried_history
@@ -71,26 +71,28 @@ class DynamicSolver(CollocationSolver):
         if not self.robot.bodies:
             return None
         nlp, physical = self.nlp, np.asarray(w, float) * self.nlp.scale
-        c0, out = params[nlp.c0_index], []
+        out = []
         for body in self.robot.bodies:
             pose = physical[nlp.pose_index[body.index]]
-            rate = c0 * pose + params[nlp.body_history_index[body.index]][0:6]
-            out.append(np.r_[pose, rate[0:3], angular_velocity(pose[3:6], rate[3:6])])
+            velocity, omega, _, _ = body_motion(params[nlp.c0_index], pose, params[nlp.body_history_index[body.index]])
+            out.append(np.r_[pose, velocity, omega])
         return np.array(out).T
 
     def _body_inertias(self, w, params):
         """Per free body its d'Alembert force and moment (global) at scaled ``w`` and ``params``
         (for its :class:`~tca_casadi.solution.BodyResult`'s residual)."""
-        values = self.body_values(w, params)
-        if values is None:
+        if not self.robot.bodies:
             return None
-        nlp, param = self.nlp, self.robot.param_function(params[:self.robot.layout.size])
-        c0, out = params[nlp.c0_index], []
-        for body, value in zip(self.robot.bodies, values.T):
-            history = params[nlp.body_history_index[body.index]]
+        nlp, physical = self.nlp, np.asarray(w, float) * self.nlp.scale
+        param = self.robot.param_function(params[:self.robot.layout.size])
+        out = []
+        for body in self.robot.bodies:
+            pose = physical[nlp.pose_index[body.index]]
+            _, omega, acceleration, omega_rate = body_motion(params[nlp.c0_index], pose,
+                                                             params[nlp.body_history_index[body.index]])
             mass = float(param(f"{body.name}.mass")[0])
-            out.append(inertial_wrench(mass, box_moments(body.size, mass), body_rotation(body, value[3:6]),
-                                       c0 * value[6:9] + history[6:9], value[9:12], c0 * value[9:12] + history[9:12]))
+            out.append(inertial_wrench(mass, box_moments(body.size, mass), body_rotation(body, pose[3:6]), acceleration,
+                                       omega, omega_rate))
         return out
 
     def outputs(self, w, params):
