@@ -11,7 +11,7 @@ import warnings
 
 import numpy as np
 
-from .errors import ScenarioError
+from .errors import ScenarioError, TcaError
 from .model import Robot
 from .model.history import carried_history, history_names_of
 from .solvers.assemble import record_slides
@@ -20,7 +20,7 @@ from .scenario.loader import validate
 from .scenario.overrides import apply_overrides
 from .solvers import CollocationSolver
 from .solvers import accuracy
-from .solvers.continuation import BranchFollower
+from .solvers.continuation import walk_branch
 from .solvers.localisation import localise
 from .status import SolveStatus, Status
 
@@ -110,8 +110,9 @@ class Simulation:
                 self._solvers[method] = getattr(solvers, SOLVERS[method])(self.robot, self.scenario.solver)
         return self._solvers[method]
 
-    def solve(self, warm_start=None, method=None, continuation=None, refine=True, warn=True):
-        """Equilibrium at the current parameters.
+    def solve(self, warm_start=None, method=None, continuation=None, refine=True, warn=True, params=None):
+        """Equilibrium at ``params`` (a parameter vector, which the simulation keeps as its
+        current parameters; None: the current parameters).
 
         ``warm_start``: a previous Solution, or ``"last"``. ``continuation`` (default from the
         scenario): ``"auto"`` follows the loads up from the unloaded reference state on a cold start
@@ -127,6 +128,8 @@ class Simulation:
         compression, slack, accuracy, ...) are recorded in ``solution.warnings`` and, with
         ``warn``, also issued with :func:`warnings.warn` (studies pass ``warn=False``).
         """
+        if params is not None:
+            self.params = np.array(params, float)
         solver = self.solver(method)
         continuation = continuation or self.scenario.solver.continuation
         initial = self.last if warm_start == "last" else warm_start
@@ -162,13 +165,21 @@ class Simulation:
                 warnings.warn(warning, stacklevel=2)
         return solution
 
-    def solve_near(self, previous=None):
-        """The equilibrium at the current parameters, for one of many nearby points (a study):
+    def solve_near(self, previous=None, params=None):
+        """The equilibrium at ``params`` (a parameter vector; None: the current parameters),
+        for one of many nearby points (a study); parameters that the robot cannot take (an
+        actuator's temperature out of its law's range, an obstacle cutting the reference
+        state) raise a :class:`~tca_casadi.errors.TcaError` naming each problem. The solve:
         Newton from ``previous`` (the Solution at a nearby point; the solver's own warm start
         without a square system), continuation from the reference state when there is none,
         or when Newton fails or leaves a TCA pushing. Newton's first steps are chord steps on
         the Jacobian factorised last (at or near ``previous``). No error estimate, no
         refinement, no warnings issued (they are in ``solution.warnings``)."""
+        if params is not None:
+            problems = self.robot.problems(params)
+            if problems:
+                raise TcaError("; ".join(problems))
+            self.params = np.array(params, float)
         solver = self.solver()
         solution = None
         self.params = carried_history(self.robot, self.params, previous)
@@ -299,12 +310,11 @@ def _format(values):
 def _follow_branch(solver, rest, target, start, first_step, min_step):
     """Collocation: predictor-corrector continuation. Returns ``(solution, lam, steps,
     iterations, last_failure)`` (``last_failure``: what the last rejected step did, or None)."""
-    follower = BranchFollower(solver, rest, target - rest)
-    point, _, steps, failure = follower.advance(follower.point(0.0, start), 1.0, first_step, 0.5, min_step)
-    iterations = start.iterations + follower.iterations
-    if failure is not None:
-        return point.solution, point.lam, steps, iterations, _failure_text(failure)
-    return point.solution, 1.0, steps, iterations, None
+    walk = walk_branch(solver, start, rest, target, first_step=first_step, max_step=0.5, min_step=min_step)
+    iterations = start.iterations + walk.iterations
+    if not walk.completed:
+        return walk.point.solution, walk.point.lam, walk.substeps, iterations, _failure_text(walk.failure)
+    return walk.point.solution, 1.0, walk.substeps, iterations, None
 
 
 def _failure_text(failure):

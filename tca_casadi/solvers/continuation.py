@@ -57,14 +57,11 @@ class BranchFollower:
     """Follow the branch of ``solver`` (a CollocationSolver) along ``P0 + lam delta``."""
 
     def __init__(self, solver, P0, delta, jump_tolerance=0.15):
-        self.solver, self.P0, self.delta = solver, np.array(P0, float), np.array(delta, float)
+        self.solver = solver
+        self.P0, self.delta = path_parameters(solver.robot, P0, delta)
         self.jump_tolerance = float(jump_tolerance)
         self.iterations = 0
-        # contact objects' history (grip anchors): the target's from the start, then updated
-        # after every accepted step (a grip that closes on the way sticks from the next step)
         self._history = history_indices(solver.robot)
-        self.P0[self._history] += self.delta[self._history]
-        self.delta[self._history] = 0.0
 
     def params_at(self, lam):
         return self.P0 + lam * self.delta
@@ -202,6 +199,66 @@ class BranchFollower:
             if step < min_step:
                 return current, step, substeps, StepFailure(trial, jump, crossed, dropped, moved)
         return current, step, substeps, None
+
+
+@dataclass
+class Walk:
+    """Where :func:`walk_branch` got to: the last accepted ``point`` (a :class:`BranchPoint`,
+    at ``lam = 1`` unless ``failure``), why it stopped short (a :class:`StepFailure`, or None),
+    the Newton ``iterations`` of every trial step, the accepted steps (``substeps``) and the
+    points at each of the ``targets`` reached (``reached``: ``(lam, Solution)``)."""
+    point: BranchPoint
+    failure: object
+    iterations: int
+    substeps: int
+    reached: list = field(default_factory=list)
+
+    @property
+    def completed(self):
+        """Whether the walk reached its last target."""
+        return self.failure is None
+
+
+def path_parameters(robot, P0, delta):
+    """``(P0, delta)`` of the straight path ``P0 + lam delta`` as it is followed: the contact
+    objects' history (grip anchors) is the target's from the start, then updated after every
+    accepted step (a grip that closes on the way sticks from the next step)."""
+    P0, delta = np.array(P0, float), np.array(delta, float)
+    history = history_indices(robot)
+    P0[history] += delta[history]
+    delta[history] = 0.0
+    return P0, delta
+
+
+def walk_branch(solver, start, start_params, end_params, *, first_step=None, max_step=1.0, min_step=1e-4,
+                linearisation=None, targets=(1.0,), jump_tolerance=0.15, record=None):
+    """Follow the branch of ``solver`` (a CollocationSolver) from the Solution ``start`` at the
+    parameter vector ``start_params`` along the straight path to ``end_params``
+    (:class:`BranchFollower`: tangent predictor, Newton corrector, branch jumps and folds
+    rejected, failed steps halved down to ``min_step``; contact objects' grips anchored as they
+    close). ``targets``: the values of ``lam`` in (0, 1] to stop at, in order (the last is 1);
+    ``first_step``: the first step's size, then doubled on success up to ``max_step`` and
+    carried from one target to the next (None: each target's whole way at first);
+    ``linearisation``: ``start``'s, if already known; ``record(point, substeps)``: called with
+    the start's :class:`BranchPoint` (0 substeps) and each target's, as it is reached. Every
+    study, the time simulation and the cold solve follow paths through this one walker.
+    Returns a :class:`Walk`."""
+    follower = BranchFollower(solver, start_params, np.asarray(end_params, float) - np.asarray(start_params, float),
+                              jump_tolerance)
+    point = follower.point(0.0, start, linearisation=linearisation)
+    if record is not None:
+        record(point, 0)
+    reached, substeps, step = [], 0, first_step
+    for target in targets:
+        step = float(target) - point.lam if first_step is None else step
+        point, step, taken, failure = follower.advance(point, float(target), step, max_step, min_step)
+        substeps += taken
+        if failure is not None:
+            return Walk(point, failure, follower.iterations, substeps, reached)
+        reached.append((float(target), point.solution))
+        if record is not None:
+            record(point, taken)
+    return Walk(point, None, follower.iterations, substeps, reached)
 
 
 def history_indices(robot):

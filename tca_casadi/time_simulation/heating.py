@@ -12,7 +12,7 @@ import numpy as np
 from ..model.rotations import matrix_to_quaternion
 from ..results import ResultAPI, status_of
 from ..status import Status
-from ..solvers.continuation import NOISE, BranchFollower, _slack_pattern
+from ..solvers.continuation import NOISE, _slack_pattern, walk_branch
 
 
 @dataclass(repr=False)
@@ -188,8 +188,7 @@ def follow_parameters(sim, series, path, progress=None, careful=None):
             if solution is not None and not careful[k] and checked is not None:
                 quick = quick_step(sim.solver("collocation"), checked.linearisation, solution, previous, params)
             if solution is None:
-                sim.params = params.copy()
-                solution = sim.solve(warn=False)
+                solution = sim.solve(warn=False, params=params)
                 if not solution.converged:
                     series.message = f"no equilibrium at t = {series.t[0]:g} s: {solution.message}"
                     break
@@ -229,10 +228,8 @@ def follow_parameters(sim, series, path, progress=None, careful=None):
 def _full_step(sim, solution, previous, params, linearisation=None):
     """One continuation step (halving on failure) from ``solution`` at ``previous`` to
     ``params``; ``linearisation``: the one at ``solution``, if known. ``(point, failure)``."""
-    follower = BranchFollower(sim.solver("collocation"), previous, params - previous)
-    start = follower.point(0.0, solution, linearisation=linearisation)
-    point, _, _, failure = follower.advance(start, 1.0, 1.0, 1.0, 1e-4)
-    return point, failure
+    walk = walk_branch(sim.solver("collocation"), solution, previous, params, linearisation=linearisation)
+    return walk.point, walk.failure
 
 
 def _stretch_holds(checked, solution, params, linearisation, jump_tolerance=0.15):

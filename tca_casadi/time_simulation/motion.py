@@ -327,8 +327,7 @@ def _static_start(sim, params):
     """The static equilibrium at ``params`` (a dynamic run's start at rest)."""
     base = sim.params.copy()
     try:
-        sim.params = np.array(params, float)
-        return sim.solve(warn=False)
+        return sim.solve(warn=False, params=params)
     finally:
         sim.params = base
 

@@ -59,11 +59,7 @@ def solve_chunk(chunk, progress=None):
             params = base.copy()
             for parameter, value in zip(parameters, values):
                 params = parameter.with_value(params, value)
-            problems = sim.robot.problems(params)
-            if problems:
-                raise TcaError("; ".join(problems))
-            sim.params = params
-            solution = sim.solve_near(previous)
+            solution = sim.solve_near(previous, params)
             row = solution_row(sim, solution, chunk.outputs)
             previous = solution if solution.converged else previous
         except TcaError as exc:

@@ -403,12 +403,11 @@ class FitModel:
         previous = None
         out = [None] * self.data.size
         for k in self.order:
-            self.sim.params = self.params_at(theta, k)
-            problems = self.sim.robot.problems(self.sim.params)
-            if problems:
-                raise TcaError(f"experiment {k + 1} at {self._describe(theta)}: " + "; ".join(problems))
             start = self.solutions[k] if self.solutions[k] is not None else previous
-            solution = self.sim.solve_near(start)
+            try:
+                solution = self.sim.solve_near(start, self.params_at(theta, k))
+            except TcaError as error:
+                raise TcaError(f"experiment {k + 1} at {self._describe(theta)}: {error}") from None
             self.solves += 1
             if not solution.converged:
                 raise TcaError(f"experiment {k + 1} did not converge at {self._describe(theta)}: {solution.message}")
@@ -472,8 +471,7 @@ def synthetic_measurements(sim, truth, inputs, names, noise, seed=0):
         point = params.copy()
         for parameter, value in zip(columns, row):
             point = parameter.with_value(point, value)
-        model_sim.params = point
-        solution = model_sim.solve_near(previous)
+        solution = model_sim.solve_near(previous, point)
         if not solution.converged:
             raise TcaError(f"synthetic experiment {k + 1} did not converge: {solution.message}")
         previous = solution

@@ -10,7 +10,7 @@ is an equilibrium, so the constraints hold exactly as in the full-space NLP.
 import numpy as np
 from scipy.optimize import least_squares
 
-from ...solvers.continuation import BranchFollower
+from ...solvers.continuation import walk_branch
 from ...status import SolveStatus, Status
 
 
@@ -39,11 +39,10 @@ class _Equilibria:
     def _continue(self, params):
         """Predictor-corrector continuation from the last equilibrium to ``params``."""
         start = self.inverse.params_at(self.tau)
-        follower = BranchFollower(self.solver, start, params - start)
         solution = self.solver.evaluate(self.w, start, SolveStatus.judged(
             "start", float("nan"), self.inverse.sim.scenario.solver.tolerance))
-        point, _, _, failure = follower.advance(follower.point(0.0, solution), 1.0, 0.5, 0.5, 1e-3)
-        return None if failure is not None else point.w
+        walk = walk_branch(self.solver, solution, start, params, first_step=0.5, max_step=0.5, min_step=1e-3)
+        return walk.point.w if walk.completed else None
 
 
 def reduced_attempt(inverse, w0, tau0, vector):

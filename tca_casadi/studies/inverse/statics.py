@@ -33,7 +33,7 @@ import numpy as np
 from ...errors import ScenarioError
 from ...model.rotations import ROTATION, rotation_angle, rotation_numpy
 from ...scenario.checks import closest
-from ...solvers.continuation import BranchFollower
+from ...solvers.continuation import walk_branch
 from ...buffers import BufferedFunction, CscPattern
 from ...status import SolveStatus, Status
 from ..parameters import resolve_parameters, shown_as_given
@@ -371,10 +371,9 @@ class InverseStatics:
         start = self._forward(self.middle())
         forward = None
         if start.converged:
-            follower = BranchFollower(self.solver, start.parameters, params - start.parameters)
-            first = follower.point(0.0, start, linearisation=self.linearisation_at(start.raw["w"], start.parameters))
-            point, _, _, failure = follower.advance(first, 1.0, 1.0, 1.0, 1e-3)
-            forward = None if failure is not None else point.solution
+            walk = walk_branch(self.solver, start, start.parameters, params, min_step=1e-3,
+                               linearisation=self.linearisation_at(start.raw["w"], start.parameters))
+            forward = walk.point.solution if walk.completed else None
         if forward is None:
             forward = self.sim.solve_at(params, method="collocation")
         names = [m.name for m in forward.modules]

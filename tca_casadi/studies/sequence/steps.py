@@ -14,7 +14,7 @@ import numpy as np
 from ...errors import PhysicsWarning, ScenarioError
 from ...results import ResultAPI, status_of
 from ...simulation import _failure_text
-from ...solvers.continuation import BranchFollower
+from ...solvers.continuation import walk_branch
 from ..compare import compare_solutions, solve_by_shooting
 from ...model.history import carried_history
 from ...solvers.assemble import record_slides
@@ -241,22 +241,16 @@ def _solve_step(sim, before, previous, frames):
         return sim.solve(method="collocation", warn=False), []          # the structure changed: start afresh
     sim.params = carried_history(sim.robot, sim.params, previous)       # contact objects' grips
     before = carried_history(sim.robot, before, previous)
-    follower = BranchFollower(solver, before, sim.params - before)
-    point = follower.point(0.0, previous)
-    transition = []
     targets = np.linspace(0, 1, frames + 2)[1:] if frames else [1.0]
-    for target in targets:
-        point, _, _, failure = follower.advance(point, float(target), float(target - point.lam), 1.0, 1e-4)
-        if failure is not None and sim.robot.path_dependent:
-            # a grasp's state depends on its path (friction): a solve from the reference state
-            # would teleport the objects; the step is reported stalled where it stopped
-            return sim._stalled(solver, point.solution, before, sim.params, point.lam, 1e-4,
-                                _failure_text(failure), follower.iterations, 0.0,
-                                origin="the previous step"), transition
-        if failure is not None:
-            solution = sim.solve(method="collocation", warn=False)            # from the reference state
-            return solution, transition
-        transition.append((float(target), point.solution))
-    record_slides(sim.robot, before, point.solution)
-    sim.last = point.solution
-    return point.solution, transition[:-1] if frames else []
+    walk = walk_branch(solver, previous, before, sim.params, targets=targets)
+    if not walk.completed and sim.robot.path_dependent:
+        # a grasp's state depends on its path (friction): a solve from the reference state
+        # would teleport the objects; the step is reported stalled where it stopped
+        return sim._stalled(solver, walk.point.solution, before, sim.params, walk.point.lam, 1e-4,
+                            _failure_text(walk.failure), walk.iterations, 0.0,
+                            origin="the previous step"), walk.reached
+    if not walk.completed:
+        return sim.solve(method="collocation", warn=False), walk.reached         # from the reference state
+    record_slides(sim.robot, before, walk.point.solution)
+    sim.last = walk.point.solution
+    return walk.point.solution, walk.reached[:-1] if frames else []

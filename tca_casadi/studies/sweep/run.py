@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...errors import ScenarioError
-from ...solvers.continuation import ArclengthFollower, BranchFollower
+from ...solvers.continuation import ArclengthFollower, path_parameters, walk_branch
 from ..parameters import check_range, resolve_parameters, shown_as_given
 from .result import SweepResult, find_events
 
@@ -84,7 +84,8 @@ class Sweep:
         if not np.any(self.delta):
             raise ScenarioError("the sweep's start and stop values are equal: nothing moves")
         self.tolerance = sim.scenario.solver.tolerance
-        self.follower = BranchFollower(self.solver, self.P_start, self.delta, jump_tolerance)
+        self.jump_tolerance = jump_tolerance
+        self._path = path_parameters(self.solver.robot, self.P_start, self.delta)
 
     def _given(self, given):
         given = list(given) if isinstance(given, (list, tuple, np.ndarray)) else [given]
@@ -97,7 +98,9 @@ class Sweep:
         return np.array([p.to_si(v, f"the {what} value") for p, v in zip(self.parameters, given)])
 
     def params_at(self, lam):
-        return self.follower.params_at(lam)
+        """The parameter vector at ``lam`` of the swept path (grip anchors: the stop's)."""
+        P0, delta = self._path
+        return P0 + lam * delta
 
     def values_at(self, lam):
         return self.start + lam * (self.stop - self.start)
@@ -110,11 +113,11 @@ class Sweep:
         first = self.sim.solve_at(self.P_start, method="collocation")
         if not first.converged:
             return self._result([], False, f"no equilibrium at the start: {first.message}", started)
-        points = [self._record(self.follower.point(0.0, first))]
-        _report(progress, points[-1], self)
-        run = self._arclength if self.arclength else self._natural
-        completed, message = run(points, progress)
-        return self._result(points, completed, message, started)
+        if self.arclength:
+            completed, message = self._arclength(first, progress)
+        else:
+            completed, message = self._natural(first, progress)
+        return self._result(self.points, completed, message, started)
 
     def _result(self, points, completed, message, started):
         return SweepResult(self.parameters, points, find_events(self.sim.robot, points, self.parameters),
@@ -136,17 +139,21 @@ class Sweep:
                           sigma, substeps, branch_point.linearisation)
 
     # ------------------------------------------------------------------ natural continuation
-    def _natural(self, points, progress):
+    def _natural(self, first, progress):
         spacing = 1.0 / (self.steps - 1)
-        current, h = points[-1], spacing
-        for index in range(1, self.steps):
-            current, h, substeps, failure = self.follower.advance(
-                current, index * spacing, h, spacing, self.min_step)
-            if failure is not None:                 # current is the last accepted point
-                return False, self._stalled(points[0], points[-1], failure)
-            points[-1].linearisation = None         # only the newest point keeps its LU
-            points.append(self._record(current, substeps))
-            _report(progress, points[-1], self)
+        self.points = []
+
+        def record(branch_point, substeps):
+            if self.points:
+                self.points[-1].linearisation = None         # only the newest point keeps its LU
+            self.points.append(self._record(branch_point, max(substeps, 1)))
+            _report(progress, self.points[-1], self)
+
+        walk = walk_branch(self.solver, first, self.P_start, self.P_start + self.delta, first_step=spacing,
+                           max_step=spacing, min_step=self.min_step, targets=spacing * np.arange(1, self.steps),
+                           jump_tolerance=self.jump_tolerance, record=record)
+        if not walk.completed:                          # the last point is the last accepted one
+            return False, self._stalled(self.points[0], self.points[-1], walk.failure)
         return True, f"completed {self.steps} steps"
 
     def _stalled(self, first, last, failure):
@@ -169,16 +176,17 @@ class Sweep:
         return f"{text}: {failure.trial.message}"
 
     # ------------------------------------------------------------------ pseudo-arclength
-    def _arclength(self, points, progress):
+    def _arclength(self, first, progress):
         follower = ArclengthFollower(self.solver, self.P_start, self.delta, self.tolerance)
+        self.points = []
 
         def record(branch_point):
-            points.append(self._record(branch_point))
-            _report(progress, points[-1], self)
-            return points[-1]
+            self.points.append(self._record(branch_point))
+            _report(progress, self.points[-1], self)
+            return self.points[-1]
 
-        first = points.pop()
-        return follower.run(first, self.steps, self.min_step, self.max_points, record,
+        start = self._record(follower.branch.point(0.0, first))
+        return follower.run(start, self.steps, self.min_step, self.max_points, record,
                             lambda point: _describe(self.parameters, point.values))
 
 
