@@ -170,7 +170,7 @@ def _shooting_by_differences(source):
     """A cold shooting solve with the forward-difference Jacobian (the previous method)."""
     from tca_casadi.solvers import ShootingSolver
     sim = Simulation.from_file(source)
-    sim._solvers["shooting"] = ShootingSolver(sim.robot, sim.scenario.solver, jacobian="differences")
+    sim.strategy.use_solver(ShootingSolver(sim.robot, sim.scenario.solver, jacobian="differences"), "shooting")
     return sim.solve(method="shooting", warn=False)
 
 
@@ -221,7 +221,7 @@ def dynamics_rate(name, dt, steps, jit=False, problem=None):
     scenario, overrides = problem or DYNAMIC_PROBLEMS[name]
     sim = Simulation.from_file(SCENARIOS / f"{scenario}.yaml", overrides + [f"solver.jit={str(jit).lower()}"])
     static = sim.solve(warn=False)
-    dynamics = RodDynamics(sim, "bdf2")
+    dynamics = RodDynamics(sim.robot, sim.solver("collocation"), "bdf2")
     state = dynamics.start(static)
     params = sim.params.copy()
     key = sim.robot.tcas[0].parameter

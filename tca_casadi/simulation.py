@@ -1,4 +1,7 @@
 """A thin orchestrator: scenario -> robot model -> solver (built once, cached) -> solution.
+How each point is solved (continuation, fallbacks, refinement, localisation) is the
+:class:`~tca_casadi.solvers.strategy.SolveStrategy`'s; the simulation holds the scenario, the
+current parameters and the last solution.
 
     sim = Simulation.from_file("scenarios/bending_module.yaml")
     first = sim.solve()
@@ -6,28 +9,16 @@
     second = sim.solve(warm_start=first)
 """
 import logging
-import time
 import warnings
 
-import numpy as np
-
-from .errors import ScenarioError, TcaError
+from .errors import ScenarioError
 from .model import Robot
-from .model.history import carried_history, history_names_of
-from .solvers.assemble import record_slides
 from .scenario import load_scenario
 from .scenario.loader import validate
 from .scenario.overrides import apply_overrides
-from .solvers import CollocationSolver
-from .solvers import accuracy
-from .solvers.continuation import walk_branch
-from .solvers.localisation import localise
-from .status import SolveStatus, Status
+from .solvers.strategy import SolveStrategy
 
 log = logging.getLogger(__name__)
-
-#: solver methods and the class behind each (the shooting solver imported when first asked for)
-SOLVERS = {"collocation": "CollocationSolver", "shooting": "ShootingSolver"}
 
 
 class Simulation:
@@ -35,11 +26,19 @@ class Simulation:
 
     def __init__(self, scenario, method=None):
         self.scenario = scenario
-        self.robot = Robot.from_scenario(scenario)
+        self.strategy = SolveStrategy(scenario, Robot.from_scenario(scenario), method or scenario.solver.method)
         self.params = self.robot.values.copy()
-        self.method = method or scenario.solver.method
-        self._solvers = {}
         self.last = None
+
+    @property
+    def robot(self):
+        """The robot model (with the contact candidates localisation added, once it has)."""
+        return self.strategy.robot
+
+    @property
+    def method(self):
+        """The solver method solves use unless told otherwise (``collocation``, ``shooting``)."""
+        return self.strategy.method
 
     @classmethod
     def from_file(cls, source, overrides=(), method=None, allow_code=False):
@@ -88,27 +87,12 @@ class Simulation:
     def use_meshes(self, meshes, degree=None):
         """Solve by collocation on ``meshes`` (per module, e.g. another process's refined mesh)
         at ``degree`` (default the scenario's): the same NLP wherever it is built."""
-        self._solvers["collocation"] = CollocationSolver.shared(
-            self.robot, self.scenario.solver, self.robot.structure_key(self.scenario), meshes, degree)
+        self.strategy.use_meshes(meshes, degree)
 
     # ------------------------------------------------------------------ solving
     def solver(self, method=None):
-        """The solver for ``method`` (built on first use, then reused while the robot is the same:
-        localised contacts make a new robot, for which a solver other than the one that
-        localised them is built anew)."""
-        method = method or self.method
-        if method in self._solvers and self._solvers[method].robot is not self.robot and method != "collocation":
-            del self._solvers[method]
-        if method not in self._solvers:
-            if method not in SOLVERS:
-                raise ScenarioError(f"unknown solver method {method!r}; available: {', '.join(SOLVERS)}")
-            if method == "collocation":        # built once per structure and process
-                self._solvers[method] = CollocationSolver.shared(
-                    self.robot, self.scenario.solver, self.robot.structure_key(self.scenario))
-            else:
-                from . import solvers
-                self._solvers[method] = getattr(solvers, SOLVERS[method])(self.robot, self.scenario.solver)
-        return self._solvers[method]
+        """The solver for ``method`` (default the simulation's), built on first use."""
+        return self.strategy.solver(method)
 
     def solve(self, warm_start=None, method=None, continuation=None, refine=True, warn=True, params=None):
         """Equilibrium at ``params`` (a parameter vector, which the simulation keeps as its
@@ -128,37 +112,9 @@ class Simulation:
         compression, slack, accuracy, ...) are recorded in ``solution.warnings`` and, with
         ``warn``, also issued with :func:`warnings.warn` (studies pass ``warn=False``).
         """
-        if params is not None:
-            self.params = np.array(params, float)
-        solver = self.solver(method)
-        continuation = continuation or self.scenario.solver.continuation
         initial = self.last if warm_start == "last" else warm_start
-        self.params = carried_history(self.robot, self.params, initial)   # contact objects' grips
-        start = self.params.copy()
-        if initial is None and continuation == "never":      # continuation checks it itself
-            self.robot.check_clear(self.robot.rest_parameters(self.params))
-        if continuation == "always" or (continuation == "auto" and initial is None):
-            solution = self.continue_from_rest(solver)
-            if not solution.converged and continuation == "auto":
-                solution = _better(solver.solve(self.params), solution)
-        elif self.robot.obstacles and continuation == "auto" and solver.has_square_system:
-            solution = self._solve_from(solver, initial)       # contact: closing is a corner
-        else:
-            solution = solver.solve(self.params, initial)
-            if continuation == "auto" and _needs_continuation(solution):
-                solution = _better(solution, self.continue_from_rest(solver))
-        if self.robot.path_dependent and solution.converged:
-            # friction: the state reached carries its path's history (each contact anchored where
-            # it ended up), which a refined solve, and the next solve, start from
-            self.params = carried_history(self.robot, self.params, solution)
-        if initial is None and solution.converged and solver.estimates_error:
-            solver, solution, _ = accuracy.control(solver, solution, self.params, refine)
-            self._solvers[method or self.method] = solver
-        if solution.converged and (solution.penetration > self.robot.contact_tolerance or self.robot.added_contacts) \
-                and solver.estimates_error and not self.robot.frictional_contacts:
-            solver, solution = localise(self, solver, solution)         # contacts between candidates
-            self._solvers[method or self.method] = solver
-        record_slides(self.robot, start, solution)
+        solution, self.params = self.strategy.solve(self.params if params is None else params, initial, method,
+                                                    continuation, refine)
         self.last = solution
         if warn:
             for warning in solution.warnings:
@@ -175,189 +131,20 @@ class Simulation:
         or when Newton fails or leaves a TCA pushing. Newton's first steps are chord steps on
         the Jacobian factorised last (at or near ``previous``). No error estimate, no
         refinement, no warnings issued (they are in ``solution.warnings``)."""
-        if params is not None:
-            problems = self.robot.problems(params)
-            if problems:
-                raise TcaError("; ".join(problems))
-            self.params = np.array(params, float)
-        solver = self.solver()
-        solution = None
-        self.params = carried_history(self.robot, self.params, previous)
-        if previous is not None:
-            solution = (solver.solve_newton(self.params, solver.initial_guess(self.params, previous),
-                                            lu=solver.square.last_lu)
-                        if solver.has_square_system else solver.solve(self.params, previous))
-        if solution is None or _needs_continuation(solution):
-            cold = self.continue_from_rest(solver)
-            solution = cold if solution is None else _better(solution, cold)
-        record_slides(self.robot, self.params, solution)
+        solution, self.params = self.strategy.solve_near(self.params if params is None else params, previous)
         self.last = solution
         return solution
 
     def solve_at(self, params, method=None):
         """Solve at the parameter vector ``params`` from the reference state (cold, with
         continuation), leaving this simulation's own parameters and last solution unchanged."""
-        saved, last = self.params.copy(), self.last
-        try:
-            self.params = np.array(params, dtype=float)
-            return self.solve(method=method, refine=False, warn=False)
-        finally:
-            self.params, self.last = saved, last
+        return self.strategy.solve(params, None, method, refine=False)[0]
 
-    def continue_from_rest(self, solver, first_step=0.25, min_step=1e-3):
-        """Follow ``P(lam) = P_rest + lam (P - P_rest)`` from the reference state (lam = 0, exact)
-        to lam = 1: predictor-corrector steps on the collocation NLP (branch jumps rejected),
-        warm-started solves for shooting; failed steps are halved down to ``min_step``."""
-        started = time.perf_counter()
-        target, rest = self.params.copy(), self.robot.rest_parameters(self.params)
-        self.robot.check_clear(rest)
-        solution = solver.solve(rest)
-        if not solution.converged:
-            return solution
-        follow = _follow_branch if solver.has_square_system else _warm_steps
-        solution, lam, steps, iterations, last_failure = follow(solver, rest, target, solution,
-                                                                first_step, min_step)
-        if lam < 1.0:
-            return self._stalled(solver, solution, rest, target, lam, min_step, last_failure,
-                                 iterations, time.perf_counter() - started)
-        note = f"continuation from the reference state, {steps} steps"
-        solution.result = solution.result.noted(note).replace(                # all steps included
-            solve_time_s=time.perf_counter() - started, nit=iterations)
-        return solution
-
-
-    def _solve_from(self, solver, initial):
-        """A warm solve of a robot with contacts: Newton (or IPOPT, ``solver.algorithm: ipopt``)
-        from ``initial``, then (a contact that closes or opens on the way is a corner Newton may
-        not turn) continuation from
-        ``initial``'s parameters to these, then from the reference state when that is clear of
-        every obstacle, IPOPT last."""
-        start = initial.parameters
-        if self.robot.path_dependent and initial.converged and start is not None and start.size == self.params.size:
-            return self._follow_from(solver, initial)
-        ipopt = solver.options.algorithm == "ipopt"
-        solution = solver.solve_ipopt(self.params, initial) if ipopt else \
-            solver.solve_newton(self.params, solver.initial_guess(self.params, initial))
-        if _needs_continuation(solution) and initial.converged and start is not None and start.size == self.params.size:
-            follow = _follow_branch(solver, start, self.params.copy(), initial, 0.25, 1e-3)
-            solution = _better(solution, follow[0] if follow[1] == 1.0 else solution)
-        if _needs_continuation(solution) and self.robot.is_clear(self.robot.rest_parameters(self.params)):
-            solution = _better(solution, self.continue_from_rest(solver))
-        if _needs_continuation(solution) and not ipopt:
-            solution = _better(solution, solver.solve_ipopt(self.params, initial))
-        return solution
-
-    def _follow_from(self, solver, initial):
-        """A warm solve of a robot with contact objects: continuation from ``initial``'s
-        parameters to these (friction depends on the path: the whole step first, halved where
-        a grasp closes or opens, a jump refused), never a solve from the reference state (it
-        would put the objects back where they were placed); stalled when it cannot go on."""
-        started = time.perf_counter()
-        start, target = initial.parameters.copy(), self.params.copy()
-        solution, lam, steps, iterations, failure = _follow_branch(solver, start, target, initial, 1.0, 1e-4)
-        if lam < 1.0:
-            return self._stalled(solver, solution, start, target, lam, 1e-4, failure, iterations,
-                                 time.perf_counter() - started, origin="the previous solution")
-        if solver.options.algorithm == "ipopt":          # the path by Newton steps, its end by IPOPT
-            polished = solver.solve_ipopt(carried_history(self.robot, self.params, solution), solution)
-            solution = polished if polished.converged else solution
-            iterations += polished.iterations
-        solution.result = solution.result.noted(f"continuation from the previous solution, {steps} steps").replace(
-            solve_time_s=time.perf_counter() - started, nit=iterations)
-        return solution
-
-    def _stalled(self, solver, reached, rest, target, lam, min_step, last_failure, iterations, elapsed,
-                 origin="the reference state"):
-        """The unconverged result of a continuation that stopped at ``lam``: the state it reached,
-        reported at the user's parameters (their values in the table, the residual there), with
-        how far it got, the parameter values reached and what the last step did."""
-        history = set(history_names_of(self.robot))
-        changed = [name for name in self.robot.layout.names() if name not in history
-                   and np.any(rest[self.robot.layout[name]] != target[self.robot.layout[name]])]
-        reached_values = rest + lam * (target - rest)
-        where = "; ".join(f"{name} {_format(reached_values[self.robot.layout[name]])} of "
-                          f"{_format(target[self.robot.layout[name]])}" for name in changed[:6])
-        more = f" and {len(changed) - 6} more" if len(changed) > 6 else ""
-        detail = (f"stalled at lambda = {lam:.4f} of 1 (step below {min_step}); reached {where}{more}; "
-                  f"the max scaled residual above is at the requested parameters; last step: {last_failure}"
-                  f"{_held_by_sliding(reached)}")
-        status = SolveStatus(Status.STALLED, f"continuation from {origin}", nit=iterations,
-                             tolerance=reached.result.tolerance, solve_time_s=elapsed, detail=detail)
-        return solver.evaluate(reached.raw.get("w", reached.raw.get("z")), target, status)
-
-
-#: a grip within this fraction of its friction (``mu f_n``) of Coulomb's cone is at its limit
-AT_LIMIT = 1e-3
-
-
-def _held_by_sliding(solution):
-    """What a stall means for a contact object off its support held by grips that are all at
-    their friction limit (sliding, or within :data:`AT_LIMIT` of it): nothing can hold more of
-    it there (``""`` if none is)."""
-    names = [body.name for body in solution.bodies if body.grips and not body.resting and all(
-        c.sliding or c.friction_margin <= AT_LIMIT * c.friction * c.normal_force for c in body.grips)]
-    if not names:
-        return ""
-    return (f"; object {', '.join(map(repr, names))} hangs there on grips all at their friction limit: "
-            "past that point the grasp cannot hold it (it would drop)")
-
-
-def _format(values):
-    values = np.atleast_1d(values)
-    return f"{values[0]:.6g}" if values.size == 1 else "[" + ", ".join(f"{v:.4g}" for v in values) + "]"
-
-
-def _follow_branch(solver, rest, target, start, first_step, min_step):
-    """Collocation: predictor-corrector continuation. Returns ``(solution, lam, steps,
-    iterations, last_failure)`` (``last_failure``: what the last rejected step did, or None)."""
-    walk = walk_branch(solver, start, rest, target, first_step=first_step, max_step=0.5, min_step=min_step)
-    iterations = start.iterations + walk.iterations
-    if not walk.completed:
-        return walk.point.solution, walk.point.lam, walk.substeps, iterations, _failure_text(walk.failure)
-    return walk.point.solution, 1.0, walk.substeps, iterations, None
-
-
-def _failure_text(failure):
-    """What the last rejected continuation step did."""
-    if not failure.trial.converged:
-        return failure.trial.message
-    if failure.dropped:
-        return (f"object {', '.join(map(repr, failure.dropped))} would drop: it jumps {failure.moved * 1e3:.3g} mm "
-                "within the smallest step continuation takes (its grasp lets go of it, or it snaps to another "
-                "equilibrium); where it lands is not a static result")
-    if failure.crossed:
-        return ("it converged, but det J changes sign within the step: a fold or a bifurcation "
-                "lies between (sweep the parameter with --arclength to follow the branch)")
-    return f"it converged only off the branch (a jump to another branch, inconsistency {failure.jump:.2g})"
-
-
-def _warm_steps(solver, rest, target, solution, first_step, min_step):
-    """Shooting: warm-started solves, halving failed steps. Returns ``(solution, lam, steps,
-    iterations, last_failure)``."""
-    lam, step, steps, iterations = 0.0, first_step, 0, solution.iterations
-    while lam < 1.0:
-        trial_lam = min(1.0, lam + step)
-        trial = solver.solve(rest + trial_lam * (target - rest), solution)
-        steps, iterations = steps + 1, iterations + trial.iterations
-        if trial.converged:
-            lam, solution, step = trial_lam, trial, min(0.5, 1.5 * step)
-        elif step / 2 >= min_step:
-            step /= 2
-        else:
-            return solution, lam, steps, iterations, trial.message
-    return solution, lam, steps, iterations, None
-
-
-def _needs_continuation(solution):
-    return (not solution.converged) or any(
-        a.kind != "tendon" and not a.tension_only and a.tension < 0 for a in solution.actuators.values())
-
-
-def _better(first, second):
-    """The converged one of two attempts; ``second`` when both or neither converged."""
-    if first.converged and not second.converged:
-        return first
-    return second
+    def continue_from_rest(self, solver=None, params=None):
+        """Continuation from the unloaded reference state to ``params`` (default the current
+        parameters) by ``solver`` (default the simulation's): :meth:`SolveStrategy.continue_from_rest
+        <tca_casadi.solvers.strategy.SolveStrategy.continue_from_rest>`."""
+        return self.strategy.continue_from_rest(solver or self.solver(), self.params if params is None else params)
 
 
 def solve(source, overrides=(), allow_code=False, **options):

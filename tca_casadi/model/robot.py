@@ -617,7 +617,7 @@ def _check_clear(robot, values):
     """ScenarioError if an obstacle already cuts a module's reference configuration (by more
     than 1e-9 m): naming the obstacle, the module, how deep and where."""
     from ..errors import ScenarioError
-    from ..solvers.guess import reference_chain
+    from .kinematics import reference_chain
     from .contact import gaps, outline_of
     from .bodies import body_shape, support_gaps
     samples = [np.linspace(0.0, module.length, CLEAR_SAMPLES) for module in robot.modules]

@@ -372,12 +372,14 @@ class StepState:
 
 
 class RodDynamics:
-    """Time stepping of ``sim``'s robot from its static equilibrium at rest.
+    """Time stepping of a robot from its static equilibrium at rest.
 
     Parameters
     ----------
-    sim : Simulation
-        Its robot, solver options and mesh (the static solver's, after any refinement).
+    robot : Robot
+        The robot model.
+    static : CollocationSolver
+        Its static solver: the options and mesh (after any refinement) the steps are solved on.
     integrator : str
         The name of one of :data:`~tca_casadi.solvers.integrators.INTEGRATORS`.
     damping : KelvinVoigt, optional
@@ -387,15 +389,14 @@ class RodDynamics:
         :data:`AUTO_JIT_STEPS` compile the step's residual (where a C compiler is found).
     """
 
-    def __init__(self, sim, integrator="bdf2", damping=None, steps=None):
+    def __init__(self, robot, static, integrator="bdf2", damping=None, steps=None):
         integrator = integrator_named(integrator)
-        _check_contact(sim.robot, integrator)
-        self.sim, self.integrator = sim, integrator
-        static = sim.solver("collocation")
-        self.solver = DynamicSolver(sim.robot, static.options, meshes=static.nlp.meshes, degree=static.degree)
+        _check_contact(robot, integrator)
+        self.robot, self.integrator = robot, integrator
+        self.solver = DynamicSolver(robot, static.options, meshes=static.nlp.meshes, degree=static.degree)
         self.solver.compile_when_auto = steps is not None and steps >= AUTO_JIT_STEPS and has_compiler()
         self.damping = [np.zeros(6) if damping is None else damping.matrix(module)
-                        for module in sim.robot.modules]
+                        for module in robot.modules]
         self.states = []                     # StepState s, the last two kept
         self._midpoints = []                 # the midpoint rule's solved states, the last two
         self._history_w = []
@@ -444,8 +445,8 @@ class RodDynamics:
         :meth:`solution`), or None if Newton did not converge (``last_status`` says why)."""
         now = self.states[-1]
         params = np.asarray(params, float)
-        if self.sim.robot.path_dependent:        # friction anchored where the contacts touch now
-            params = carried_history(self.sim.robot, params, self.contact_solution(now))
+        if self.robot.path_dependent:        # friction anchored where the contacts touch now
+            params = carried_history(self.robot, params, self.contact_solution(now))
         scheme = self.integrator
         solved_at = scheme.parameters_at(params, now.params)
         restarting = len(self.states) < 2 or now.restart > 0
@@ -487,8 +488,8 @@ class RodDynamics:
         w, status = self._newton(guess, full, self._lu)
         if not status.success:
             w, status = self._continued(guess, self._solved_parameters(now), solved_at, c0, histories, status,
-                                        contact=bool(self.sim.robot.obstacles))
-        if not status.success and self.sim.robot.obstacles:
+                                        contact=bool(self.robot.obstacles))
+        if not status.success and self.robot.obstacles:
             # a contact closing or opening: the complementarity's kink defeats the line search
             w, status = self._newton(guess, full, contact=True)
             clear = None if status.success else self._clear_of_obstacles(guess, solved_at)
@@ -524,7 +525,7 @@ class RodDynamics:
 
     def _solved_parameters(self, state):
         """The robot parameters ``state`` was solved at (the start: its static equilibrium's)."""
-        return self._equilibrium if state.full is None else state.full[:self.sim.robot.layout.size]
+        return self._equilibrium if state.full is None else state.full[:self.robot.layout.size]
 
     def _continued(self, guess, start, end, c0, histories, status, shortest=1 / 64, solve_start=False,
                    contact=False):
@@ -561,7 +562,7 @@ class RodDynamics:
         outward normal at the deepest node until they clear it by that much; None if none is
         that near. Where an impact's step fails, the step is solved with the obstacles there
         and continued to their places (:meth:`_continued`)."""
-        robot, nlp = self.sim.robot, self.solver.nlp
+        robot, nlp = self.robot, self.solver.nlp
         physical = np.asarray(w, float) * nlp.scale
         moved, changed = np.array(params, float), False
         for shape in robot.at(params).obstacles:
@@ -607,7 +608,7 @@ class RodDynamics:
         """The :class:`StepOutputs` of the end of the step that reached ``state`` (the start:
         the state at rest, at its parameters; with friction, its closed contacts too)."""
         out = self._outputs(state)
-        if self.sim.robot.path_dependent:
+        if self.robot.path_dependent:
             found = self.contact_solution(state)
             out.contacts, out.bodies, out.body_motion = found.contacts, found.bodies, state.bodies
         return out
@@ -629,7 +630,7 @@ class RodDynamics:
 
     def tip_velocity(self, state):
         """The tip's global velocity [m/s] (3,) at ``state``: ``R q`` at the tip module's end."""
-        nlp, tip = self.solver.nlp, self.sim.robot.tip_index
+        nlp, tip = self.solver.nlp, self.robot.tip_index
         rotation = state.tip_rotation
         if rotation is None:
             _, ends, _ = self.solver._outputs_at(state.w, np.zeros(nlp.parameter_size))
@@ -696,7 +697,7 @@ class RodDynamics:
         """The tip [m] (3,) at ``state`` (the end of the tip module, from the node values)."""
         nlp = self.solver.nlp
         _, ends, _ = self.solver._outputs_at(state.w, np.zeros(nlp.parameter_size))
-        return ends[0:3, self.sim.robot.tip_index]
+        return ends[0:3, self.robot.tip_index]
 
     def rigid_energies(self, state, solution, params=None):
         """``(kinetic, gravitational)`` [J] of the rigid point masses at ``state`` (its
@@ -710,7 +711,7 @@ class RodDynamics:
         params = solution.parameters if params is None else np.asarray(params, float)
         full = self.solver.parameters(params, 0.0, self.damping,
                                       [np.zeros((12, nodes[0].shape[1])) for nodes in self.nodes_of(state)])
-        gravity = params[self.sim.robot.layout["gravity"]]
+        gravity = params[self.robot.layout["gravity"]]
         kinetic = potential = 0.0
         for mass, offset, (q, w, _, _), position, R in self.solver.rigid_points(state.w, full, frame):
             c = np.zeros(3) if offset is None else np.asarray(offset, float)
@@ -722,7 +723,7 @@ class RodDynamics:
     def _rigid_masses(self):
         """Whether the robot carries rigid point masses (point masses, held objects, connector
         masses; their values may still be 0 at some parameters)."""
-        robot = self.sim.robot
+        robot = self.robot
         return any(load.kind != "point" for load in robot.point_loads) or any(
             module.connector is not None and module.connector.mass > 0 for module in robot.modules)
 
@@ -736,9 +737,9 @@ class RodDynamics:
         if key not in cache:
             if len(cache) >= 8:
                 cache.pop(next(iter(cache)))
-            param, evaluated = self.sim.robot.param_function(params), self.sim.robot.at(params)
+            param, evaluated = self.robot.param_function(params), self.robot.at(params)
             cache[key] = [(*inertia_per_length(module, param), evaluated.modules[m].stiffness,
-                           self.solver.nlp.node_weights(m)[:-1]) for m, module in enumerate(self.sim.robot.modules)]
+                           self.solver.nlp.node_weights(m)[:-1]) for m, module in enumerate(self.robot.modules)]
         return cache[key]
 
     def body_energies(self, state, params):
@@ -746,7 +747,7 @@ class RodDynamics:
         omega . J omega / 2`` and ``-m g . r`` (masses and gravity from ``params``)."""
         if state.bodies is None:
             return 0.0, 0.0
-        robot = self.sim.robot
+        robot = self.robot
         param = robot.param_function(params)
         gravity = np.asarray(param("gravity"), float).ravel()
         kinetic = potential = 0.0
@@ -771,8 +772,8 @@ class RodDynamics:
                        + elastic_energy_density(stiffness, strain))
             total += float(density @ weights)
         if state.bodies is not None:
-            param = self.sim.robot.param_function(state.params)
-            for body, a, b in zip(self.sim.robot.bodies, previous.bodies.T, state.bodies.T):
+            param = self.robot.param_function(state.params)
+            for body, a, b in zip(self.robot.bodies, previous.bodies.T, state.bodies.T):
                 mass = float(param(f"{body.name}.mass")[0])
                 total += kinetic_energy(mass, box_moments(body.size, mass), b[6:9] - a[6:9], b[9:12] - a[9:12])
         if self._rigid_masses:

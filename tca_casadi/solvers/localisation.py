@@ -26,15 +26,18 @@ NEAREST = 1e-6
 SETTLED = 1e-7
 
 
-def localise(simulation, solver, solution):
-    """``(solver, solution)``: ``solution`` (converged, by ``solver``, a CollocationSolver, at
-    ``simulation.params``) with candidates added until no point of any rod penetrates an
-    obstacle and each added one sits where the gap's slope vanishes; ``simulation.robot`` becomes the robot with those candidates. Returns the input
-    unchanged when nothing needs adding or a new solve fails (its penetration warning stays)."""
-    scenario, robot, history = simulation.scenario, simulation.robot, {}
+def localise(strategy, solver, solution, params):
+    """``(robot, solver, solution)``: ``solution`` (converged, by ``solver``, a
+    CollocationSolver of ``strategy.robot``, at the parameter vector ``params``) with candidates
+    added until no point of any rod penetrates an obstacle and each added one sits where the
+    gap's slope vanishes, and the robot with those candidates. Returns the inputs unchanged
+    when nothing needs adding or a new solve fails (its penetration warning stays).
+    ``strategy``: the :class:`~tca_casadi.solvers.strategy.SolveStrategy` (its scenario, and
+    its continuation from rest where a new candidate's solve needs it)."""
+    scenario, robot, history = strategy.scenario, strategy.robot, {}
     for _ in range(scenario.contact.localise):
         added = _added_points(robot, solver.nlp.meshes, solution, history,
-                              _slope_of(solver, solution.raw["w"], robot.at(simulation.params)))
+                              _slope_of(solver, solution.raw["w"], robot.at(params)))
         if added is None:
             break
         moved = Robot.from_scenario(scenario, added)
@@ -42,19 +45,19 @@ def localise(simulation, solver, solution):
                   for m, mesh in enumerate(solver.nlp.meshes)]
         candidate = CollocationSolver.shared(moved, scenario.solver, moved.structure_key(scenario), meshes,
                                              solver.degree)
-        w0 = accuracy.interpolate(solver.nlp, solution.raw["w"], candidate.nlp, simulation.params)
-        trial = candidate.solve_newton(simulation.params, w0)
+        w0 = accuracy.interpolate(solver.nlp, solution.raw["w"], candidate.nlp, params)
+        trial = candidate.solve_newton(params, w0)
         if not trial.converged:
-            trial = candidate.solve_ipopt(simulation.params, _warm(trial, w0))
+            trial = candidate.solve_ipopt(params, _warm(trial, w0))
         if not trial.converged:            # a contact far from the last one: from the reference state
-            trial = simulation.continue_from_rest(candidate)
+            trial = strategy.continue_from_rest(candidate, params)
         if not trial.converged:
             log.info("contact localisation: the solve with candidates %s failed (%s)", added, trial.message)
             break
         log.info("contact localisation: candidates %s, penetration %.2e m", added, trial.penetration)
         robot, solver, solution = moved, candidate, trial
-    simulation.robot = robot
-    return solver, solution
+    return robot, solver, solution
+
 
 
 def _slope_of(solver, w, placed):

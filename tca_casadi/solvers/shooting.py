@@ -665,7 +665,7 @@ def segment_grid(s0, s1, extra=None, panels=1):
 
 def _reference_trajectory(robot, params):
     """``(module_data, tensions, lengths)`` of the unloaded reference shape (exact, no integration)."""
-    from .guess import reference_chain
+    from ..model.kinematics import reference_chain
     grids = [segment_grid(0.0, module.length) for module in robot.modules]
     samples = [s for s, _ in grids]
     module_data = [(s, states, np.zeros(6), w)

@@ -91,7 +91,7 @@ class EnergyAccount:
         midpoint state), whose tensions and loads then do the work over the whole step (the
         rule's own discrete energy identity); else the trapezoidal rule on the two ends."""
         if previous is not None:
-            robot = self.dynamics.sim.robot
+            robot = self.dynamics.robot
             if during is None:
                 pulls = {k: 0.5 * (a.tension + previous_solution.actuators[k].tension) for k, a in solution.actuators.items()}
             else:
@@ -119,7 +119,7 @@ class EnergyAccount:
             # a point mass that changed (an object let go or taken) takes or brings its energy (at
             # this step's gravity: a change of gravity is the field's work above)
             masses = np.array(previous_solution.parameters, float)
-            index = self.dynamics.sim.robot.layout["gravity"]
+            index = self.dynamics.robot.layout["gravity"]
             masses[index] = np.asarray(solution.parameters, float)[index]
             kept = self.dynamics.rigid_energies(state, solution, masses)
             self._work["load_work"] += rigid - sum(kept)
@@ -134,7 +134,7 @@ class EnergyAccount:
         """The work [J] of a change of gravity over a step (a lift's acceleration is one, in its
         frame): ``-sum m (g_{n+1} - g_n) . (x_n + x_{n+1}) / 2`` over every mass, as the mean over
         the step's two ends of the gravitational energy's change with ``g`` alone."""
-        robot = self.dynamics.sim.robot
+        robot = self.dynamics.robot
         old = np.asarray(before.parameters, float)
         index = robot.layout["gravity"]
         if np.array_equal(old[index], np.asarray(after.parameters, float)[index]):
@@ -147,7 +147,7 @@ class EnergyAccount:
     def _gravitational(self, state, view, params):
         """The gravitational energy [J] of the rods, rigid point masses and free bodies at
         ``state`` (its StepOutputs ``view``) with the masses and gravity of ``params``."""
-        gravity = np.asarray(params, float)[self.dynamics.sim.robot.layout["gravity"]]
+        gravity = np.asarray(params, float)[self.dynamics.robot.layout["gravity"]]
         potential = -sum(float(mass * (gravity @ result.p) @ result.weights)
                          for result, (mass, *_) in zip(view.modules, self.dynamics.sections(params)))
         return (potential + self.dynamics.rigid_energies(state, view, params)[1]
@@ -289,7 +289,8 @@ def follow_dynamics(sim, series, path, progress=None, initial=None, start=None):
     if not first.converged:
         series.message = f"no equilibrium at t = {series.t[0]:g} s: {first.message}"
         return series
-    dynamics = RodDynamics(sim, config.integrator, damping_of(config.damping, sim.scenario), steps=len(path) - 1)
+    dynamics = RodDynamics(sim.robot, sim.solver("collocation"), config.integrator,
+                           damping_of(config.damping, sim.scenario), steps=len(path) - 1)
     series.compiled = dynamics.solver.compiles
     state = dynamics.start(first, series.t[0])
     state.params = np.array(path[0], float)         # the steps start from the values after any event at t0

@@ -21,7 +21,7 @@ def at_rest_then(sim, path, value, integrator, damping=None):
     """``(dynamics, state, params, static)``: ``sim``'s static equilibrium as the state at rest,
     the parameter ``path`` set to ``value`` from t = 0+."""
     static = sim.solve(warn=False)
-    dynamics = RodDynamics(sim, integrator, damping)
+    dynamics = RodDynamics(sim.robot, sim.solver("collocation"), integrator, damping)
     state = dynamics.start(static)
     params = sim.params.copy()
     params[sim.robot.layout[path]] = value

@@ -13,8 +13,8 @@ import numpy as np
 
 from ...errors import PhysicsWarning, ScenarioError
 from ...results import ResultAPI, status_of
-from ...simulation import _failure_text
 from ...solvers.continuation import walk_branch
+from ...solvers.strategy import failure_text
 from ..compare import compare_solutions, solve_by_shooting
 from ...model.history import carried_history
 from ...solvers.assemble import record_slides
@@ -246,9 +246,9 @@ def _solve_step(sim, before, previous, frames):
     if not walk.completed and sim.robot.path_dependent:
         # a grasp's state depends on its path (friction): a solve from the reference state
         # would teleport the objects; the step is reported stalled where it stopped
-        return sim._stalled(solver, walk.point.solution, before, sim.params, walk.point.lam, 1e-4,
-                            _failure_text(walk.failure), walk.iterations, 0.0,
-                            origin="the previous step"), walk.reached
+        return sim.strategy.stalled(solver, walk.point.solution, before, sim.params, walk.point.lam, 1e-4,
+                                    failure_text(walk.failure), walk.iterations, 0.0,
+                                    origin="the previous step"), walk.reached
     if not walk.completed:
         return sim.solve(method="collocation", warn=False), walk.reached         # from the reference state
     record_slides(sim.robot, before, walk.point.solution)
