@@ -61,7 +61,8 @@ class BranchFollower:
         self.P0, self.delta = path_parameters(solver.robot, P0, delta)
         self.jump_tolerance = float(jump_tolerance)
         self.iterations = 0
-        self._history = history_indices(solver.robot)
+        #: the rules of a path with contact objects (None without them)
+        self.grasp = GraspPath(solver) if history_indices(solver.robot).size else None
 
     def params_at(self, lam):
         return self.P0 + lam * self.delta
@@ -70,9 +71,8 @@ class BranchFollower:
         """A :class:`BranchPoint` with the linearisation at ``(w, P(lam))`` (``linearisation``:
         one already computed there)."""
         w = solution.raw["w"] if w is None else np.asarray(w, float)
-        if self._history.size:              # anchored where it is: nothing has slipped yet
-            w = w.copy()
-            w[self.solver.nlp.slip_index] = 0.0
+        if self.grasp is not None:
+            w = self.grasp.anchored(w)
         linear = linearisation or self.solver.linearise(w, self.params_at(lam))
         try:
             sign = linear.determinant_sign()
@@ -85,11 +85,6 @@ class BranchFollower:
     #: IPOPT is tried after a failed Newton step only on steps up to this size (lam); a larger
     #: failed step is halved first, which is much cheaper
     IPOPT_STEP = 1.0 / 16
-    #: with contact objects (friction is path-dependent: a grip sticks from where it closed),
-    #: a step on which a contact or actuator changes side of its corner is taken only up to
-    #: this size (lam): no step jumps across a grasp closing
-    CORNER_STEP = 1.0 / 32
-
     def step(self, current, lam):
         """Newton from the tangent predictor at ``lam`` (IPOPT, warm-started, if Newton fails
         on a small step; not with contact objects, where a failed small step is a grasp giving
@@ -97,47 +92,10 @@ class BranchFollower:
         predicted = current.w + (lam - current.lam) * current.w_rate
         lu = current.linearisation.lu if current.linearisation is not None else None
         trial = self.solver.solve_newton(self.params_at(lam), predicted, lu=lu, search=False)
-        if not trial.converged and lam - current.lam <= self.IPOPT_STEP + 1e-12 and not self._history.size:
+        if not trial.converged and lam - current.lam <= self.IPOPT_STEP + 1e-12 and self.grasp is None:
             trial = self.solver.solve_ipopt(self.params_at(lam), current.solution)
         self.iterations += trial.iterations
         return trial
-
-    def _grasp_jump(self, corner, step, jump):
-        """The trapezoid test with contact objects: a step across a corner is taken only up to
-        :data:`CORNER_STEP` (no step jumps across a grasp closing); on steps up to that size the
-        test is not applied (a grip's contact point crossing an edge of the object turns its
-        normal within a step: a corner the pattern does not see, not another branch)."""
-        if step <= self.CORNER_STEP:
-            return 0.0
-        return np.inf if corner else jump
-
-    def _dropped(self, a, b):
-        """``(names, moved [m])`` of the contact objects whose position jumps between the
-        points ``a`` and ``b``: by more than :data:`DROP` of their size and off the trapezoidal
-        rule on their tangents (a kink where a grip or the support closes or opens moves them
-        little over a small step; a grasp letting go moves them by their fall however small)."""
-        names, moved = [], 0.0
-        for body, index in zip(self.solver.robot.bodies, self.solver.nlp.pose_index):
-            position = index[0:3]                          # scaled by the body's largest edge
-            change = b.w[position] - a.w[position]
-            size = float(np.max(np.abs(change)))
-            if size <= DROP:
-                continue
-            error = change - 0.5 * (b.lam - a.lam) * (a.w_rate[position] + b.w_rate[position])
-            if float(np.max(np.abs(error))) > DROP_INCONSISTENCY * size:
-                names.append(body.name)
-                moved = max(moved, float(np.linalg.norm(change)) * body.length_scale)
-        return tuple(names), moved
-
-    def _stick(self, lam, trial, candidate):
-        """The accepted point with the history carried from it (the grips closed there are
-        anchored where they touch): the same state, linearised again if the history changed."""
-        from ..model.history import carried_history
-        carried = carried_history(self.solver.robot, self.P0, trial)
-        if np.array_equal(carried, self.P0):
-            return candidate
-        self.P0 = carried
-        return self.point(lam, trial)
 
     @staticmethod
     def inconsistency(a, b):
@@ -185,13 +143,11 @@ class BranchFollower:
                 corner = _slack_pattern(current.solution) != _slack_pattern(trial)
                 jump = 0.0 if corner else self.inconsistency(current, candidate)
                 crossed = not corner and candidate.det_sign * current.det_sign < 0
-                if self._history.size:       # contact objects
-                    jump = self._grasp_jump(corner, lam - current.lam, jump)
-                    dropped, moved = self._dropped(current, candidate)
-                    jump = np.inf if dropped else jump
+                if self.grasp is not None:
+                    jump, dropped, moved = self.grasp.judged(current, candidate, corner, jump)
                 if jump <= self.jump_tolerance and not crossed:
-                    if self._history.size:
-                        candidate = self._stick(lam, trial, candidate)
+                    if self.grasp is not None:
+                        candidate = self.grasp.stuck(self, lam, trial, candidate)
                     current, substeps = candidate, substeps + 1
                     step = min(2 * step, max_step)
                     continue
@@ -265,8 +221,73 @@ def history_indices(robot):
     """Indices into the parameter vector of a robot's contact-object history (grip anchors and
     support anchors, :mod:`tca_casadi.model.bodies`)."""
     from ..model.history import history_names_of
-    names = history_names_of(robot) if hasattr(robot, "layout") else []
-    return np.array([i for name in names for i in range(robot.layout.size)[robot.layout[name]]], int)
+    return np.array([i for name in history_names_of(robot) for i in range(robot.layout.size)[robot.layout[name]]],
+                    int)
+
+
+class GraspPath:
+    """What following a branch means with contact objects (grasped and resting free bodies):
+    friction makes the path matter. A grip sticks from where it closed (the history is carried
+    after every accepted step, :meth:`stuck`), a step across a contact's corner is taken only
+    up to :data:`CORNER_STEP` (no step jumps across a grasp closing), an object that jumps
+    within a step has dropped (:meth:`judged`), points are anchored where they are (nothing has
+    slipped yet, :meth:`anchored`), and IPOPT is not tried (a failed small step is a grasp giving
+    or a box tipping, which it does not mend). The :class:`BranchFollower` asks it; nothing
+    else in the follower knows about contact objects."""
+
+    #: a step on which a contact or actuator changes side of its corner is taken only up to
+    #: this size (lam)
+    CORNER_STEP = 1.0 / 32
+
+    def __init__(self, solver):
+        self.solver = solver
+
+    def anchored(self, w):
+        """``w`` with every grip's slip set to zero: anchored where it is."""
+        w = np.array(w, float)
+        w[self.solver.nlp.slip_index] = 0.0
+        return w
+
+    def judged(self, current, candidate, corner, jump):
+        """``(jump, dropped, moved)`` of the step from ``current`` to ``candidate``: the
+        trapezoid test's ``jump`` as it applies with contact objects (a step across a corner is
+        taken only up to :data:`CORNER_STEP`; on steps up to that size the test is not applied:
+        a grip's contact point crossing an edge of the object turns its normal within a step, a
+        corner the pattern does not see, not another branch), infinite where an object dropped;
+        the names of the objects that dropped and how far the farthest moved [m]."""
+        step = candidate.lam - current.lam
+        jump = 0.0 if step <= self.CORNER_STEP else (np.inf if corner else jump)
+        dropped, moved = self.dropped(current, candidate)
+        return (np.inf if dropped else jump), dropped, moved
+
+    def dropped(self, a, b):
+        """``(names, moved [m])`` of the contact objects whose position jumps between the
+        points ``a`` and ``b``: by more than :data:`DROP` of their size and off the trapezoidal
+        rule on their tangents (a kink where a grip or the support closes or opens moves them
+        little over a small step; a grasp letting go moves them by their fall however small)."""
+        names, moved = [], 0.0
+        for body, index in zip(self.solver.robot.bodies, self.solver.nlp.pose_index):
+            position = index[0:3]                          # scaled by the body's largest edge
+            change = b.w[position] - a.w[position]
+            size = float(np.max(np.abs(change)))
+            if size <= DROP:
+                continue
+            error = change - 0.5 * (b.lam - a.lam) * (a.w_rate[position] + b.w_rate[position])
+            if float(np.max(np.abs(error))) > DROP_INCONSISTENCY * size:
+                names.append(body.name)
+                moved = max(moved, float(np.linalg.norm(change)) * body.length_scale)
+        return tuple(names), moved
+
+    def stuck(self, follower, lam, trial, candidate):
+        """The accepted point with the history carried from it (the grips closed there are
+        anchored where they touch): the same state, linearised again if the history changed
+        (``follower``'s path start takes the new history)."""
+        from ..model.history import carried_history
+        carried = carried_history(self.solver.robot, follower.P0, trial)
+        if np.array_equal(carried, follower.P0):
+            return candidate
+        follower.P0 = carried
+        return follower.point(lam, trial)
 
 
 def _slack_pattern(solution):
