@@ -126,10 +126,10 @@ def bench_problem(name, source, repeats, steps, shooting_repeats, inverse_querie
     row["intervals"] = "+".join(map(str, cold.accuracy.intervals)) if cold.accuracy else "-"
     nudged = nudge(sim, sim.params)
     row["warm_ipopt_s"], warm = median_time(lambda: solver.solve_ipopt(nudged, cold), max(repeats, 5))
-    row["warm_newton_s"], fast = median_time(lambda: solver.solve_newton(nudged, cold.raw["w"]), max(repeats, 5))
+    row["warm_newton_s"], fast = median_time(lambda: solver.solve_newton(nudged, cold.iterate.w), max(repeats, 5))
     row["warm_newton_equals_ipopt_m"] = float(np.max(np.abs(fast.tip_position - warm.tip_position)))
     stiffer = redesign(sim, sim.params)
-    row["design_newton_s"], designed = median_time(lambda: solver.solve_newton(stiffer, cold.raw["w"]),
+    row["design_newton_s"], designed = median_time(lambda: solver.solve_newton(stiffer, cold.iterate.w),
                                                    max(repeats, 5))
     row["design_converged"] = bool(designed.converged)
     paths, start, stop = sweep_paths(sim)
@@ -418,7 +418,7 @@ def muscle_rates(repeats, steps):
         slot = sim.robot.layout[path]
         nudged = sim.params.copy()
         nudged[slot] = nudged[slot] * 1.01 + 0.01 * (stop - start) * (nudged[slot] == 0)
-        row["warm_newton_s"], warm = median_time(lambda: solver.solve_newton(nudged, cold.raw["w"]), max(repeats, 5))
+        row["warm_newton_s"], warm = median_time(lambda: solver.solve_newton(nudged, cold.iterate.w), max(repeats, 5))
         row["warm_converged"] = bool(warm.converged)
         row["sweep_steps"] = steps
         row["sweep_s"], sweep = median_time(lambda: Sweep(sim, [path], start, stop, steps=steps).run(), repeats)

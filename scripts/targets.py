@@ -69,7 +69,7 @@ def warm_solve(repeats):
         sim = Simulation.from_file(SCENARIOS / "bending_module.yaml", ["solver.algorithm=newton", f"solver.jit={jit}"])
         cold = sim.solve(warn=False)
         solver = sim.solver()
-        square, w = solver.square, cold.raw["w"]
+        square, w = solver.square, cold.iterate.w
         lu = square.factorise(square.evaluate(w, sim.params)[1])
         nudged = nudge(sim, sim.params)
         out[f"newton_{jit}_s"], _ = median_time(lambda: square.newton(w, nudged, solver.options.tolerance, lu=lu),

@@ -306,6 +306,37 @@ class TipOfModules:
         return self.modules[self.tip_module].tip_rotation
 
 
+@dataclass(frozen=True, repr=False)
+class Iterate:
+    """A solver's own variables at a Solution: studies and the time simulation hand it back to
+    the solver's methods (warm starts, linearisations, continuation) and never interpret it.
+
+    Attributes
+    ----------
+    method : str
+        The solver that made it (``collocation``, ``shooting``, ``collocation-dynamics``).
+    w : ndarray or None
+        The collocation NLP's scaled variables (n,), or None (shooting).
+    z : ndarray or None
+        The shooting unknowns, or None (collocation).
+    contact : ndarray
+        The contact block in physical units (both solvers: the other's warm start).
+    """
+    method: str = ""
+    w: Optional[np.ndarray] = None
+    z: Optional[np.ndarray] = None
+    contact: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @property
+    def values(self):
+        """The solver's vector: ``w`` (collocation) or ``z`` (shooting); None if neither."""
+        return self.w if self.w is not None else self.z
+
+    def fits(self, method, size):
+        """Whether a solver of ``method`` with ``size`` variables can start from it."""
+        return self.method == method and self.w is not None and self.w.size == size
+
+
 @dataclass(repr=False)
 class Solution(TipOfModules, ResultAPI):
     """An equilibrium (or a failed attempt: ``converged`` is False, never hidden).
@@ -320,7 +351,7 @@ class Solution(TipOfModules, ResultAPI):
     warnings: list = field(default_factory=list)
     parameters: Optional[np.ndarray] = None
     parameter_names: Optional[dict] = None
-    raw: dict = field(default_factory=dict, repr=False)
+    iterate: Iterate = field(default_factory=Iterate, repr=False)   # the solver's variables
     scenario_name: str = ""
     tip_module: int = -1      # index of the module whose tip is "the tip" (Robot.tip_index)
     balance: Optional[object] = None   # model.balance.GlobalBalance of the whole robot

@@ -514,7 +514,7 @@ class Plan:
         if not first.converged:
             raise SolverError(f"plan: no equilibrium at t = 0: {first.message}")
         solver = sim.solver()
-        return solver, [first.raw["w"]] * (self.nodes + 1), [None] * (self.nodes + 1)
+        return solver, [first.iterate.w] * (self.nodes + 1), [None] * (self.nodes + 1)
 
     def nodes_at(self, u, derivatives=False):
         """``(tips (N + 1, 3) [m], dtips (N + 1, 3, N k) or None)`` at the inputs ``u``: the
@@ -562,7 +562,7 @@ class Plan:
                 solution = self.sim.solve_at(params)
                 if not solution.converged:
                     raise _NoEquilibrium(k, self.step * k, solution.message)
-                w = solution.raw["w"]
+                w = solution.iterate.w
             ws[k], lus[k] = w, solver.square.last_lu
             y, y_w, y_P = pose(w, params)
             tips[k] = y

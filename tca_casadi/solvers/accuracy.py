@@ -125,7 +125,7 @@ def estimate(solver, solution, params, higher):
     CollocationSolver) against ``higher`` (the same meshes at degree d + 1); None if the
     higher-degree Newton solve fails. ``indicators`` (:class:`Indicators`) say where the
     differences arise."""
-    w0 = interpolate(solver.nlp, solution.raw["w"], higher.nlp, params)
+    w0 = interpolate(solver.nlp, solution.iterate.w, higher.nlp, params)
     better = higher.solve_newton(params, w0)
     if not better.converged:
         return None
@@ -134,7 +134,7 @@ def estimate(solver, solution, params, higher):
     better_tensions = np.array([a.tension for a in better.actuators.values()])
     floor = max(float(np.max(np.abs(tensions), initial=0.0)), TENSION_FLOOR)
     errors = np.abs(better_tensions - tensions) / floor                 # per actuator, robot order
-    indicators = Indicators(solver.nlp, solution.raw["w"], higher.nlp, better.raw["w"], errors)
+    indicators = Indicators(solver.nlp, solution.iterate.w, higher.nlp, better.iterate.w, errors)
     return tip, float(np.max(errors, initial=0.0)), indicators
 
 
@@ -213,7 +213,7 @@ def control(solver, solution, params, refine=True):
         if found.met or not refine or options.refine == "off" or refinements >= MAX_ROUNDS or found.limit_reached:
             return solver, _attach(solution, found, refine and options.refine == "auto"), found
         finer = solver.finer(meshes)
-        trial = finer.solve_newton(params, interpolate(solver.nlp, solution.raw["w"], finer.nlp, params))
+        trial = finer.solve_newton(params, interpolate(solver.nlp, solution.iterate.w, finer.nlp, params))
         if not trial.converged:
             return solver, _attach(solution, found, True), found
         trial.result = solution.result.noted(f"mesh refined where the error was, Newton on the finer mesh "

@@ -289,11 +289,11 @@ def _nearest_node(robot, shape, module_data):
     return best
 
 
-def build_solution(robot, params, module_data, tensions, lengths, result, method, raw, notices=(), extra_loads=None,
+def build_solution(robot, params, module_data, tensions, lengths, result, method, iterate, notices=(), extra_loads=None,
                    contact_forces=None, clearance=None, bodies=None, frictions=None, check_balance=True):
     """Solution from ``module_data = [(s, states, base_wrench_body, weights), ...]``, tensions per
     actuator (list in ``robot.actuators`` order) and lengths; ``result`` the
-    :class:`SolveStatus`, ``method`` the solver's name, ``raw`` its variables (``w`` or ``z``),
+    :class:`SolveStatus`, ``method`` the solver's name, ``iterate`` its variables (an :class:`Iterate`),
     ``notices`` the solver's own :class:`PhysicsWarning` s (e.g. a floored tolerance);
     ``extra_loads``: ``(points, forces, moments)`` (3, k) global, beyond the robot's own loads,
     for the global balance (a dynamic step's inertial loads); ``contact_forces`` (n,) [N] the
@@ -330,7 +330,7 @@ def build_solution(robot, params, module_data, tensions, lengths, result, method
     warnings.extend(notices)
     if not result.success:
         warnings.insert(0, not_converged(result))
-    return Solution(result=result, method=method, raw=dict(raw, method=method),
+    return Solution(result=result, method=method, iterate=iterate,
                     modules=modules, actuators=actuators, warnings=warnings,
                     parameters=np.array(params, float), parameter_names=dict(robot.layout.slices),
                     scenario_name=robot.name, tip_module=robot.tip_index, balance=balance,

@@ -13,6 +13,7 @@ from ..errors import PhysicsWarning
 from ..status import SolveStatus, Status
 from . import accuracy
 from ..model.contact import gaps, outline_of
+from ..solution import Iterate
 from .assemble import build_solution
 from .guess import reference_guess
 from ..buffers import BufferedFunction
@@ -105,9 +106,8 @@ class CollocationSolver:
 
     def initial_guess(self, params, initial=None):
         """Scaled start point: a previous solution's variables if compatible, else the reference shape."""
-        if initial is not None and initial.raw.get("w") is not None and \
-                initial.raw.get("method") == self.method and initial.raw["w"].size == self.nlp.scale.size:
-            return initial.raw["w"]
+        if initial is not None and initial.iterate.fits(self.method, self.nlp.scale.size):
+            return initial.iterate.w
         return reference_guess(self.nlp, params)
 
     def solve(self, params, initial=None):
@@ -280,7 +280,7 @@ class CollocationSolver:
                                           f"{self.options.tolerance:.0e}: roundoff in the equations' terms on this "
                                           "mesh allows no less"))
         return build_solution(self.robot, robot_params, module_data, tensions, lengths.ravel(), status,
-                              self.method, {"w": w, "contact": w_phys[nlp.contact_block_index]}, notices=notices,
+                              self.method, Iterate(self.method, w=np.asarray(w, float), contact=w_phys[nlp.contact_block_index]), notices=notices,
                               check_balance=balance,
                               extra_loads=self._extra_loads(w, params, module_data) if balance else None,
                               **contact)

@@ -70,7 +70,7 @@ class BranchFollower:
     def point(self, lam, solution, w=None, tangent=None, linearisation=None):
         """A :class:`BranchPoint` with the linearisation at ``(w, P(lam))`` (``linearisation``:
         one already computed there)."""
-        w = solution.raw["w"] if w is None else np.asarray(w, float)
+        w = solution.iterate.w if w is None else np.asarray(w, float)
         if self.grasp is not None:
             w = self.grasp.anchored(w)
         linear = linearisation or self.solver.linearise(w, self.params_at(lam))
@@ -124,7 +124,7 @@ class BranchFollower:
         point, step, substeps, failure = self._advance(current, target, step, max_step, min_step)
         if point is not current and self.solver.robot.obstacles:
             solution = point.solution
-            point = replace(point, solution=self.solver.evaluate(solution.raw["w"], solution.parameters,
+            point = replace(point, solution=self.solver.evaluate(solution.iterate.w, solution.parameters,
                                                                  solution.result))
         return point, step, substeps, failure
 
@@ -355,7 +355,7 @@ class ArclengthFollower:
         if not final.converged:
             return False, f"the last step to the stop value failed: {final.message}"
         tangent = np.r_[current.w_rate, current.lam_rate]
-        tangent = self.tangent(self.solver.linearise(final.raw["w"], self.params_at(1.0)), tangent)
+        tangent = self.tangent(self.solver.linearise(final.iterate.w, self.params_at(1.0)), tangent)
         record(self.branch.point(1.0, final, tangent=tangent))
         return True, f"reached the stop value in {count + 1} points (pseudo-arclength)"
 

@@ -404,7 +404,7 @@ class RodDynamics:
 
     def start(self, solution, t=0.0):
         """Begin at rest in the static ``solution`` (its collocation variables) at time ``t``."""
-        static_w = solution.raw["w"]
+        static_w = solution.iterate.w
         w = np.concatenate([static_w, np.zeros(self.solver.nlp.scale.size - static_w.size)])
         at_rest = self.solver.parameters(solution.parameters, 0.0, self.damping,
                                          [np.zeros((12, x[0].shape[1])) for x in self.solver.node_values(w)])

@@ -12,8 +12,11 @@ short intervals.
 """
 import logging
 
+import numpy as np
+
 from ..discretisation.mesh import ModuleMesh
 from ..model import Robot
+from ..solution import Iterate
 from . import accuracy
 from .collocation import CollocationSolver
 
@@ -37,7 +40,7 @@ def localise(strategy, solver, solution, params):
     scenario, robot, history = strategy.scenario, strategy.robot, {}
     for _ in range(scenario.contact.localise):
         added = _added_points(robot, solver.nlp.meshes, solution, history,
-                              _slope_of(solver, solution.raw["w"], robot.at(params)))
+                              _slope_of(solver, solution.iterate.w, robot.at(params)))
         if added is None:
             break
         moved = Robot.from_scenario(scenario, added)
@@ -45,7 +48,7 @@ def localise(strategy, solver, solution, params):
                   for m, mesh in enumerate(solver.nlp.meshes)]
         candidate = CollocationSolver.shared(moved, scenario.solver, moved.structure_key(scenario), meshes,
                                              solver.degree)
-        w0 = accuracy.interpolate(solver.nlp, solution.raw["w"], candidate.nlp, params)
+        w0 = accuracy.interpolate(solver.nlp, solution.iterate.w, candidate.nlp, params)
         trial = candidate.solve_newton(params, w0)
         if not trial.converged:
             trial = candidate.solve_ipopt(params, _warm(trial, w0))
@@ -77,7 +80,7 @@ def _slope_of(solver, w, placed):
 
 def _warm(trial, w0):
     """A Solution-like warm start from scaled variables ``w0`` for IPOPT."""
-    return type("Warm", (), {"raw": {"w": w0, "method": "collocation"}})()
+    return type("Warm", (), {"iterate": Iterate("collocation", w=np.asarray(w0, float))})()
 
 
 def _added_points(robot, meshes, solution, history, slope):

@@ -36,6 +36,7 @@ from ..model.contact_unknowns import ContactUnknowns, contact_conditions
 from ..model.loads import distributed_fields, is_active
 from ..model.rod import STATE_SIZE, explicit_strain_rate, rod_equations
 from ..model.routes import route_expressions
+from ..solution import Iterate
 from .assemble import build_solution
 from ..buffers import BufferedFunction
 
@@ -107,7 +108,7 @@ class ShootingSolver:
 
     def initial_guess(self, initial=None):
         """Scaled unknowns from a previous Solution (any method), else the reference state. The
-        contact block comes from the Solution's own (``raw["contact"]``, both solvers write it)
+        contact block comes from the Solution's own (``iterate.contact``, both solvers write it)
         when it has the same size, else it starts at zero forces and the placed bodies."""
         n_strain = 6 * len(self._free)
         z = np.zeros(self._contact_start + self._contact.size)
@@ -116,7 +117,7 @@ class ShootingSolver:
                 start, module = initial.modules[m], self.robot.modules[m]
                 z[6 * k:6 * k + 6] = np.r_[start.u[:, 0], start.v[:, 0]] - module.xi_star
             z[n_strain:self._contact_start] = [initial.actuators[a.key].tension for a in self.robot.unknowns]
-            block = np.asarray(initial.raw.get("contact", ()), float)
+            block = np.asarray(initial.iterate.contact, float)
             if block.size == self._contact.size:
                 z[self._contact_start:] = block
         return z / self._unknown_scale()
@@ -185,14 +186,14 @@ class ShootingSolver:
         status = SolveStatus(Status.INTEGRATION_FAILED, "scipy root (hybr)", residual=float("inf"),
                              tolerance=self.tolerance, solve_time_s=elapsed, build_time_s=self.build_time_s,
                              detail=message)
-        return build_solution(self.robot, params, *trial, status, self.method, {},
+        return build_solution(self.robot, params, *trial, status, self.method, Iterate(self.method),
                               **self._contact.solution_values(np.zeros(self._contact.size)))
 
     def _solution(self, params, trajectory, status, z, notices):
         """The :class:`Solution` of a shot at scaled unknowns ``z``: its contact forces and bodies
-        from the contact block, which ``raw["contact"]`` keeps (physical) for warm starts."""
+        from the contact block, which ``iterate.contact`` keeps (physical) for warm starts."""
         block = (z * self._unknown_scale())[self._contact_start:]
-        return build_solution(self.robot, params, *trajectory, status, self.method, {"z": z, "contact": block},
+        return build_solution(self.robot, params, *trajectory, status, self.method, Iterate(self.method, z=np.asarray(z, float), contact=np.asarray(block, float)),
                               notices, **self._contact.solution_values(block))
 
     def _notices(self, residual):

@@ -204,7 +204,7 @@ class SolveStrategy:
                   f"{_held_by_sliding(reached)}")
         status = SolveStatus(Status.STALLED, f"continuation from {origin}", nit=iterations,
                              tolerance=reached.result.tolerance, solve_time_s=elapsed, detail=detail)
-        return solver.evaluate(reached.raw.get("w", reached.raw.get("z")), target, status)
+        return solver.evaluate(reached.iterate.values, target, status)
 
 
 #: a grip within this fraction of its friction (``mu f_n``) of Coulomb's cone is at its limit

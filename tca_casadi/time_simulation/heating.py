@@ -204,7 +204,7 @@ def follow_parameters(sim, series, path, progress=None, careful=None):
             else:
                 solution = quick
                 if k - checked.index >= CHECK_EVERY or k == len(path) - 1:
-                    linearisation = sim.solver("collocation").linearise(solution.raw["w"], params)
+                    linearisation = sim.solver("collocation").linearise(solution.iterate.w, params)
                     if not _stretch_holds(checked, solution, params, linearisation):
                         del series.solutions[checked.index + 1:]          # redo it with full steps
                         careful[checked.index + 1:k + 1] = True
@@ -241,12 +241,12 @@ def _stretch_holds(checked, solution, params, linearisation, jump_tolerance=0.15
         if linearisation.determinant_sign() * checked.linearisation.determinant_sign() <= 0:
             return False
         delta = np.asarray(params, float) - checked.params
-        change = solution.raw["w"] - checked.solution.raw["w"]
+        change = solution.iterate.w - checked.solution.iterate.w
         rates = checked.linearisation.state_derivative(delta) + linearisation.state_derivative(delta)
     except RuntimeError:                    # singular: a fold at an end
         return False
     size = float(np.max(np.abs(change)))
-    if size <= NOISE * max(1.0, float(np.max(np.abs(checked.solution.raw["w"])))):
+    if size <= NOISE * max(1.0, float(np.max(np.abs(checked.solution.iterate.w)))):
         return True
     return float(np.max(np.abs(change - 0.5 * rates))) <= jump_tolerance * size
 
@@ -258,12 +258,12 @@ def quick_step(solver, linearisation, solution, previous, params, jump_tolerance
     when its correction is more than ``jump_tolerance`` of the predicted change (it left the
     predicted branch), or when an actuator goes slack or taut (a corner of the branch): the
     caller then takes a full continuation step."""
-    w = solution.raw["w"]
+    w = solution.iterate.w
     predicted = w + linearisation.state_derivative(np.asarray(params, float) - previous)
     trial = solver.solve_newton(params, predicted, lu=linearisation.lu)
     if not trial.converged or _slack_pattern(trial) != _slack_pattern(solution):
         return None
     change = float(np.max(np.abs(predicted - w)))
-    correction = float(np.max(np.abs(trial.raw["w"] - predicted)))
+    correction = float(np.max(np.abs(trial.iterate.w - predicted)))
     floor = 1e-12 * max(1.0, float(np.max(np.abs(w))))
     return trial if correction <= jump_tolerance * change + floor else None

@@ -77,7 +77,7 @@ def test_the_refined_solver_serves_later_warm_solves():
     solver = sim.solver()
     assert [len(m.intervals) for m in solver.nlp.meshes] == first.accuracy.intervals
     warm = sim.solve(warm_start=first)
-    assert warm.converged and warm.raw["w"].size == first.raw["w"].size
+    assert warm.converged and warm.iterate.w.size == first.iterate.w.size
 
 
 def test_refinement_keeps_only_the_meshes_it_may_need_again():

@@ -50,7 +50,7 @@ def fine_gaps(sim, solution):
     """Gaps [m] of every module against every obstacle at 64 points per collocation interval."""
     solver = sim.solver()
     out = []
-    for m, (s, states) in solver.fine_states(solution.raw["w"], 64).items():
+    for m, (s, states) in solver.fine_states(solution.iterate.w, 64).items():
         module = sim.robot.modules[m]
         for shape in sim.robot.obstacles:
             out += [gap(shape, outline_of(module), states[0:3, j], rotation_numpy(states[3:7, j]))[0]
@@ -100,8 +100,8 @@ def test_sphere_push_equals_a_point_load_of_the_reported_contact_force():
     reference_sim.use_meshes(sim.solver().nlp.meshes, sim.solver().degree)       # the same discretisation
     reference = reference_sim.solve(refine=False)
     s = np.linspace(0.0, 0.1, 201)
-    shape = sim.solver()._poses_at(solution.raw["w"], 0, s)[0]
-    expected = reference_sim.solver()._poses_at(reference.raw["w"], 0, s)[0]
+    shape = sim.solver()._poses_at(solution.iterate.w, 0, s)[0]
+    expected = reference_sim.solver()._poses_at(reference.iterate.w, 0, s)[0]
     assert_allclose(shape, expected, rtol=0, atol=1e-9)
 
 
@@ -145,7 +145,7 @@ def test_complementarity_and_no_penetration_on_random_robots(scenario):
     assert solution.converged, solution.message
     assert solution.balance.relative < 1e-8
     solver = sim.solver()
-    forces = solution.raw["w"][solver.nlp.contact_index] * solver.nlp.scale[solver.nlp.contact_index]
+    forces = solution.iterate.w[solver.nlp.contact_index] * solver.nlp.scale[solver.nlp.contact_index]
     modules = solution.modules
     for c in sim.robot.contacts:
         module = sim.robot.modules[c.module]

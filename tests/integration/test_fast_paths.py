@@ -47,7 +47,7 @@ def test_newton_matches_ipopt_cold_warm_and_on_a_step(path):
     nudge(by_ipopt), nudge(fast)
     solver = fast.solver()
     step_ipopt = solver.solve_ipopt(fast.params, start)
-    step_newton = solver.solve_newton(fast.params, start.raw["w"])
+    step_newton = solver.solve_newton(fast.params, start.iterate.w)
     assert step_newton.result.algorithm == "Newton" and step_newton.status == Status.CONVERGED
     assert_same(step_ipopt, step_newton)
     warm_ipopt, warm_fast = by_ipopt.solve(warm_start="last"), fast.solve(warm_start="last")
@@ -90,7 +90,7 @@ def test_state_derivative_by_forward_mode_equals_the_full_parameter_jacobian_s()
     1e-10 of its size, and against central differences of Newton solves to 1e-6 of it."""
     sim = Simulation.from_file(SCENARIOS / "bending_module.yaml")
     solution = sim.solve(warn=False)
-    solver, w, params = sim.solver("collocation"), solution.raw["w"], sim.params.copy()
+    solver, w, params = sim.solver("collocation"), solution.iterate.w, sim.params.copy()
     selector = np.zeros((params.size, 3))
     for j, key in enumerate(("bending.tca1", "bending.tca2", "bending.tca3")):
         selector[sim.robot.layout[f"{key}.temperature"].start, j] = 1.0

@@ -21,7 +21,7 @@ def test_the_compiled_residual_gives_the_same_solution_and_is_kept(tmp_path, mon
     libraries = sorted((tmp_path / "jit").glob("nlp_g_*.so"))      # this NLP's, and the error estimate's
     assert 1 <= len(libraries) <= 2
     square = sim.solver("collocation").square
-    w = fast.raw["w"]
+    w = fast.iterate.w
     interpreted = np.array(square._residual_function(w, sim.params)).ravel()
     assert_allclose(square.residual(w, sim.params), interpreted, rtol=0, atol=1e-14)
     assert_allclose(fast.tip_position, plain.tip_position, rtol=0, atol=1e-12)

@@ -312,10 +312,10 @@ class Study:
         self._mesh({})
         nominal = self.nominal
         solution = nominal.last if nominal is not None else None
-        if solution is None or not solution.converged or "w" not in solution.raw:
+        if solution is None or not solution.converged or solution.iterate.w is None:
             return None
         resolved = [resolve_parameter(nominal.robot, nominal.params, p) for p in self.parameters]
-        linear = nominal.solver().linearise(solution.raw["w"], nominal.params)
+        linear = nominal.solver().linearise(solution.iterate.w, nominal.params)
         directions = np.column_stack([p.vector(nominal.params.size) for p in resolved])
         return linear.tip_derivative(directions)
 

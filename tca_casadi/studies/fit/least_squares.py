@@ -423,7 +423,7 @@ class FitModel:
         """Predicted measurements (n, q) in SI."""
         solutions = self.solve(theta)
         rows = range(self.data.size) if rows is None else rows
-        return np.array([self.measure(solutions[k].raw["w"], self.params_at(theta, k))[0].copy() for k in rows])
+        return np.array([self.measure(solutions[k].iterate.w, self.params_at(theta, k))[0].copy() for k in rows])
 
     def residuals(self, theta, rows):
         """Weighted residuals ``(y - m) / sigma`` of the experiments ``rows``, flattened (n q,)."""
@@ -440,7 +440,7 @@ class FitModel:
         pattern = self.patterns
         out = np.zeros((len(rows) * q, len(self.parameters)))
         for i, k in enumerate(rows):
-            w, params = solutions[k].raw["w"], self.params_at(theta, k)
+            w, params = solutions[k].iterate.w, self.params_at(theta, k)
             _, y_w, y_P = self.measure(w, params)
             linear = self.solver.linearise(w, params)
             dw = linear.state_derivative(self.directions)                    # (n_w, p)
@@ -475,7 +475,7 @@ def synthetic_measurements(sim, truth, inputs, names, noise, seed=0):
         if not solution.converged:
             raise TcaError(f"synthetic experiment {k + 1} did not converge: {solution.message}")
         previous = solution
-        values[k] = np.array(function(solution.raw["w"], point)[0]).ravel() + sigmas * rng.standard_normal(len(names))
+        values[k] = np.array(function(solution.iterate.w, point)[0]).ravel() + sigmas * rng.standard_normal(len(names))
     return Measurements(columns, given, list(names), values, np.tile(sigmas, (len(given), 1)), "<synthetic>")
 
 

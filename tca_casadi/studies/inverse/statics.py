@@ -274,7 +274,7 @@ class InverseStatics:
 
     def _forward_w(self, tau):
         solution = self._forward(tau)
-        return solution.raw["w"] if solution.converged else None
+        return solution.iterate.w if solution.converged else None
 
     def _attempt(self, w0, tau0, vector, target):
         """One optimisation from ``(w0, tau0)``: a dict with the answer (``w``, ``tau``, pose,
@@ -372,7 +372,7 @@ class InverseStatics:
         forward = None
         if start.converged:
             walk = walk_branch(self.solver, start, start.parameters, params, min_step=1e-3,
-                               linearisation=self.linearisation_at(start.raw["w"], start.parameters))
+                               linearisation=self.linearisation_at(start.iterate.w, start.parameters))
             forward = walk.point.solution if walk.completed else None
         if forward is None:
             forward = self.sim.solve_at(params, method="collocation")

@@ -237,7 +237,7 @@ def _check_step(sim, result, solution, shot):
 def _solve_step(sim, before, previous, frames):
     """From ``previous`` (at parameters ``before``) to the current parameters, by continuation."""
     solver = sim.solver("collocation")
-    if previous.raw.get("w") is None or previous.raw["w"].size != solver.nlp.scale.size:
+    if previous.iterate.w is None or previous.iterate.w.size != solver.nlp.scale.size:
         return sim.solve(method="collocation", warn=False), []          # the structure changed: start afresh
     sim.params = carried_history(sim.robot, sim.params, previous)       # contact objects' grips
     before = carried_history(sim.robot, before, previous)
