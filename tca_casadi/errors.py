@@ -4,7 +4,34 @@ Bad user input raises :class:`ScenarioError` (the CLI turns it into one line and
 Algorithmic failure is *not* an exception: a :class:`~tca_casadi.solution.Solution` carries
 ``converged=False`` with a status and message. :class:`SolverError` exists for callers who prefer
 an exception (``Solution.raise_if_failed()``) and keeps the failed solution.
+
+Messages name an option as the user gave it (:func:`flag`): ``--data`` when the command line
+runs (:func:`command_line`), the keyword argument ``data`` from Python.
 """
+import contextlib
+import contextvars
+
+#: which front end the user is calling through: ``"python"`` or ``"cli"``
+_FRONT_END = contextvars.ContextVar("tca_casadi_front_end", default="python")
+
+
+def flag(option, python=None):
+    """An option in a message as the user gave it: ``option`` (``"--power-budget"``) on the
+    command line, else ``python`` if given (``"allow_code=True"``), else the keyword argument
+    (``"power_budget"``)."""
+    if _FRONT_END.get() == "cli":
+        return option
+    return python if python is not None else option.lstrip("-").replace("-", "_")
+
+
+@contextlib.contextmanager
+def command_line():
+    """Within it, messages name options as the command line spells them (:func:`flag`)."""
+    token = _FRONT_END.set("cli")
+    try:
+        yield
+    finally:
+        _FRONT_END.reset(token)
 
 
 class TcaError(Exception):

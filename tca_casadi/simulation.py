@@ -11,7 +11,7 @@ current parameters and the last solution.
 import logging
 import warnings
 
-from .errors import ScenarioError
+from .errors import ScenarioError, flag
 from .model import Robot
 from .scenario import load_scenario
 from .scenario.loader import validate
@@ -68,7 +68,7 @@ class Simulation:
             problems = self.robot.problems(params)
             if problems:
                 Robot.from_scenario(scenario)        # names the scenario key where it can
-                raise ScenarioError(f"--set {path}: " + "; ".join(problems))
+                raise ScenarioError(f"{flag('--set')} {path}: " + "; ".join(problems))
             self.scenario, self.params = scenario, params
             return
         log.info("%s changes the structure: rebuilding", path)

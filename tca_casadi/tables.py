@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import ScenarioError
+from .errors import ScenarioError, flag
 from .text import clip
 
 #: the largest file read [bytes]
@@ -162,5 +162,5 @@ def read_json_lines(path, option):
             if number == len(lines):
                 break
             raise ScenarioError(f"{option}: {clip(path, 200)} line {number}: not a JSON row; the file is damaged "
-                                "(delete it, or run without --resume)") from None
+                                f"(delete it, or run without {flag('--resume')})") from None
     return records

@@ -3,7 +3,7 @@ import logging
 import signal
 import sys
 
-from ..errors import ScenarioError, TcaError
+from ..errors import ScenarioError, TcaError, command_line
 from .fit import _fit
 from .parser import build_parser
 from .plan import _plan
@@ -24,7 +24,8 @@ def main(argv=None):
         args = build_parser().parse_args(argv)
         logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                             format="%(levelname)s %(name)s: %(message)s")
-        return COMMANDS[args.command](args)
+        with command_line():                    # messages name options as --flags
+            return COMMANDS[args.command](args)
     except ScenarioError as exc:
         print("\n".join(f"error: {line}" for line in str(exc).splitlines()), file=sys.stderr)
         return 2

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ScenarioError, SolverError
+from ..errors import ScenarioError, SolverError, flag
 from ..results import ResultAPI, status_of
 from ..time_simulation.timeline import mpc_drives  # noqa: F401  (re-exported)
 from .plan import HeatingRecord, Plan, _NoEquilibrium, held_from, read_path
@@ -174,7 +174,7 @@ class ClosedLoop:
         self.settings = settings
         self.duration = float(duration or scenario.duration or 0.0)
         if not self.duration > 0:
-            raise ScenarioError("simulate with an mpc drive needs a duration (the scenario's or --duration)")
+            raise ScenarioError(f"simulate with an mpc drive needs a duration (the scenario's or {flag('--duration')})")
         as_power = [f"{key}.drive={{kind: power, value: {d.value!r}}}" for key, d in drives]
         self.model = Simulation.from_file(source, list(overrides) + as_power, allow_code=allow_code)
         self.plant = Simulation.from_file(source, list(overrides) + list(plant_overrides) + as_power,
@@ -211,7 +211,7 @@ class ClosedLoop:
         same_laws = np.array_equal(constants(changed), constants(self.model), equal_nan=True)
         if same_laws and np.array_equal(changed.params, self.model.params):
             path = override.partition("=")[0].strip()
-            raise ScenarioError(f"--plant-set {override!r} changes nothing the robot uses"
+            raise ScenarioError(f"{flag('--plant-set')} {override!r} changes nothing the robot uses"
                                 + did_you_mean(path, self.model.robot.layout.names()))
 
     def target_at(self, t):

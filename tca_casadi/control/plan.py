@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ScenarioError, SolverError
+from ..errors import ScenarioError, SolverError, flag
 from ..results import ResultAPI
 from ..solvers.thermal import steady_state, zero_order_hold
 from ..status import SolveStatus, Status
@@ -320,24 +320,24 @@ class Plan:
                  angle_tolerance=np.radians(1.0), power_budget=None):
         from ..time_simulation.timeline import TimeSimulation
         if objective not in OBJECTIVES:
-            raise ScenarioError(f"--objective {objective!r}: one of {', '.join(OBJECTIVES)}")
+            raise ScenarioError(f"{flag('--objective')} {objective!r}: one of {', '.join(OBJECTIVES)}")
         if not horizon > 0 or not np.isfinite(horizon):
-            raise ScenarioError(f"--horizon must be positive (got {horizon:g} s)")
+            raise ScenarioError(f"{flag('--horizon')} must be positive (got {horizon:g} s)")
         if int(nodes) < 1:
-            raise ScenarioError(f"--nodes must be at least 1 (got {nodes})")
+            raise ScenarioError(f"{flag('--nodes')} must be at least 1 (got {nodes})")
         if not tolerance > 0:
-            raise ScenarioError(f"--tolerance must be positive (got {tolerance:g} m)")
+            raise ScenarioError(f"{flag('--tolerance')} must be positive (got {tolerance:g} m)")
         self.sim, self.objective, self.horizon, self.nodes = sim, objective, float(horizon), int(nodes)
         self.tolerance = float(tolerance)
         self.point, self.point_index = self._point(point)
         self.direction, self.angle_tolerance = self._direction(direction), float(angle_tolerance)
         if not self.angle_tolerance > 0:
-            raise ScenarioError(f"--angle-tolerance must be positive (got {np.degrees(self.angle_tolerance):g} deg)")
+            raise ScenarioError(f"{flag('--angle-tolerance')} must be positive (got {np.degrees(self.angle_tolerance):g} deg)")
         self.step = self.horizon / self.nodes
         self.targets = self._targets(target)
         self.by = self.horizon if by is None else float(by)
         if objective == "energy" and not 0 <= self.by <= self.horizon:
-            raise ScenarioError(f"--by {self.by:g} s is outside the horizon (0 to {self.horizon:g} s)")
+            raise ScenarioError(f"{flag('--by')} {self.by:g} s is outside the horizon (0 to {self.horizon:g} s)")
         last = max((e.at + (e.ramp or 0.0) for e in sim.scenario.timeline), default=0.0)
         timed = TimeSimulation(sim, duration=max(self.horizon, last), dt=self.step)
         self.heated, self.laws, self.coupling = timed.heated, timed.laws, timed.coupling
@@ -380,9 +380,9 @@ class Plan:
             return np.tile(np.asarray(target, float).reshape(3), (self.nodes + 1, 1))
         path_times, positions = (np.asarray(part, float) for part in target)
         if path_times.ndim != 1 or positions.shape != (path_times.size, 3) or path_times.size < 1:
-            raise ScenarioError("plan --path: give times (m,) and positions (m, 3)")
+            raise ScenarioError(f"plan {flag('--path')}: give times (m,) and positions (m, 3)")
         if np.any(np.diff(path_times) <= 0):
-            raise ScenarioError("plan --path: the times must increase from row to row")
+            raise ScenarioError(f"plan {flag('--path')}: the times must increase from row to row")
         return np.column_stack([np.interp(times, path_times, positions[:, j]) for j in range(3)])
 
     def _point(self, point):
@@ -392,7 +392,7 @@ class Plan:
         if point in (None, "tip"):
             return "tip", self.sim.robot.tip_index
         if point not in names:
-            raise ScenarioError(f"--point {point!r} is not 'tip' or a module" + did_you_mean(point, names))
+            raise ScenarioError(f"{flag('--point')} {point!r} is not 'tip' or a module" + did_you_mean(point, names))
         return point, names.index(point)
 
     def _direction(self, direction):
@@ -400,7 +400,7 @@ class Plan:
         if direction is None:
             return None
         if self.objective == "track":
-            raise ScenarioError("plan --objective track follows positions; a --target-direction is for time and energy")
+            raise ScenarioError(f"plan {flag('--objective')} track follows positions; a {flag('--target-direction')} is for time and energy")
         from ..studies.inverse.targets import Target
         return Target.create(np.zeros(3), direction).direction
 
@@ -416,7 +416,7 @@ class Plan:
             return list(known)
         for path in vary:
             if path not in known:
-                raise ScenarioError(f"--vary {path!r} is not a heated TCA's drive value"
+                raise ScenarioError(f"{flag('--vary')} {path!r} is not a heated TCA's drive value"
                                     + did_you_mean(path, list(known)))
         return list(dict.fromkeys(vary))
 
@@ -434,9 +434,9 @@ class Plan:
             try:
                 values = [float(to_si(b, DRIVE_UNITS[kind])) for b in bounds]
             except (TypeError, ValueError) as exc:
-                raise ScenarioError(f"--bounds for {path} (a {kind} drive, in {DRIVE_UNIT[kind]}): {exc}") from None
+                raise ScenarioError(f"{flag('--bounds')} for {path} (a {kind} drive, in {DRIVE_UNIT[kind]}): {exc}") from None
             if values[0] < 0 or values[1] <= values[0]:
-                raise ScenarioError(f"--bounds {values[0]:g} {values[1]:g} {DRIVE_UNIT[kind]}: give 0 <= LO < HI "
+                raise ScenarioError(f"{flag('--bounds')} {values[0]:g} {values[1]:g} {DRIVE_UNIT[kind]}: give 0 <= LO < HI "
                                     f"(a {kind} drive's value cannot be negative)")
             rows.append(tuple(float(power_of(kind, resistance, v)) for v in values))
         return np.array(rows, float)
@@ -448,13 +448,13 @@ class Plan:
             return None
         budget, fixed = float(budget), float(np.sum(self._fixed))
         if not budget > 0 or not np.isfinite(budget):
-            raise ScenarioError(f"--power-budget must be positive (got {budget:g} W)")
+            raise ScenarioError(f"{flag('--power-budget')} must be positive (got {budget:g} W)")
         if budget - fixed < self.bounds[:, 0].sum():
-            raise ScenarioError(f"--power-budget {budget:g} W: the inputs that are not varied draw {fixed:g} W and the "
+            raise ScenarioError(f"{flag('--power-budget')} {budget:g} W: the inputs that are not varied draw {fixed:g} W and the "
                                 f"varied ones at least {self.bounds[:, 0].sum():g} W")
         self.bounds[:, 1] = np.minimum(self.bounds[:, 1], budget - fixed)
         if np.any(self.bounds[:, 1] <= self.bounds[:, 0]):
-            raise ScenarioError(f"--power-budget {budget:g} W leaves an input no range above its lower bound")
+            raise ScenarioError(f"{flag('--power-budget')} {budget:g} W leaves an input no range above its lower bound")
         return budget
 
     def _budget_rows(self):
@@ -782,7 +782,7 @@ class Plan:
             message = (f"the target is not reached within the horizon: the closest pose is "
                        f"{errors[closest] * 1e3:.4g} mm away" + ("" if angles is None else
                                                                f" and {np.degrees(angles[closest]):.3g} deg off the direction")
-                       + " (raise --horizon or the --bounds, or move the target)")
+                       + f" (raise {flag('--horizon')} or the {flag('--bounds')}, or move the target)")
         u = np.asarray(u, float).reshape(self.nodes, len(self.paths))
         energy = float(np.sum(u) * self.step) + self._fixed_energy
         status = status.replace(solve_time_s=seconds, nit=evaluations)
@@ -806,7 +806,7 @@ def held_from(t, errors, tolerance):
     return float(t[k])
 
 
-def read_path(path, label="plan --path"):
+def read_path(path, label=f"plan {flag('--path')}"):
     """``(times (m,) [s], positions (m, 3) [m])`` of a CSV with columns ``t``, ``x``, ``y``,
     ``z`` (units in the header: ``t [s]``, ``x [mm]``; none: SI), times increasing. Read by
     :func:`tca_casadi.tables.read_table` (one-line errors for any bad file, naming ``label``)."""

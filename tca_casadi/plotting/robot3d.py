@@ -4,6 +4,7 @@ when not, tendons orange; objects as grey boxes."""
 import functools
 
 import numpy as np
+from ..errors import flag
 
 COLORS = {"heated": "#d62728", "passive": "#2ca02c", "tendon": "#ff7f0e",
           "section": "#1f77b4", "centerline": "black", "object": "#7f7f7f", "held": "#9467bd",
@@ -47,14 +48,14 @@ def view_of(view=None, projection=None):
     projection is one of :data:`PROJECTIONS`; a view two finite angles [deg]."""
     from ..errors import ScenarioError
     if projection is not None and projection not in PROJECTIONS:
-        raise ScenarioError(f"--projection {projection!r}: one of {', '.join(PROJECTIONS)}")
+        raise ScenarioError(f"{flag('--projection')} {projection!r}: one of {', '.join(PROJECTIONS)}")
     if view is not None:
         try:
             azimuth, elevation = (float(v) for v in (view.split(",") if isinstance(view, str) else view))
         except (TypeError, ValueError):
-            raise ScenarioError(f"--view {view!r}: give AZIMUTH,ELEVATION in degrees, e.g. --view -60,20") from None
+            raise ScenarioError(f"{flag('--view')} {view!r}: give AZIMUTH,ELEVATION in degrees, e.g. {flag('--view')} -60,20") from None
         if not (np.isfinite(azimuth) and np.isfinite(elevation)):
-            raise ScenarioError(f"--view {view!r}: the angles must be finite")
+            raise ScenarioError(f"{flag('--view')} {view!r}: the angles must be finite")
         view = (azimuth, elevation)
     return {"view": view, "projection": projection}
 

@@ -12,6 +12,7 @@
 import numpy as np
 
 from .robot3d import _pyplot, finish, set_equal_limits, style_axes
+from ..errors import flag
 
 PLANES = (("x", "y", 0, 1), ("x", "z", 0, 2), ("y", "z", 1, 2))
 
@@ -50,7 +51,7 @@ def _colour_column(result, color):
     column = color or result.inputs[0]
     if column not in data.columns:
         from ..errors import ScenarioError
-        raise ScenarioError(f"study --color: no column {column!r}; columns: {', '.join(data.columns[:40])}")
+        raise ScenarioError(f"study {flag('--color')}: no column {column!r}; columns: {', '.join(data.columns[:40])}")
     values, label = shown_input(result, column)
     return label, values
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pydantic
 
-from ..errors import ScenarioError
+from ..errors import ScenarioError, flag
 from .checks import check_references
 from .overrides import apply_overrides
 from .schema import Scenario
@@ -47,7 +47,7 @@ def refuse_code(raw, sources):
             folder = config.get("folder") if isinstance(config.get("folder"), str) else None
             problems.append(f"{located(sources, path, raw)}: this scenario runs Python code: "
                             f"{describe_entry_point(config['entry_point'], folder)}; if you trust it, allow it "
-                            "with --allow-code (Python: allow_code=True)")
+                            f"with {flag('--allow-code', 'allow_code=True')}")
     if problems:
         raise ScenarioError("\n".join(problems))
 

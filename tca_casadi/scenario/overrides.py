@@ -7,7 +7,7 @@ actuator name. Values are read as YAML (so ``100``, ``"45 mm"`` and ``[0, 0, 1]`
 import copy
 import difflib
 
-from ..errors import ScenarioError
+from ..errors import ScenarioError, flag
 from .checks import RESERVED, closest
 from .schema import Module
 from .sources import clip, shorten
@@ -17,32 +17,39 @@ from .yaml_safe import parse_value
 def parse_override(text):
     """``"a.b=1"`` -> ``("a.b", 1)``."""
     if "=" not in text:
-        raise ScenarioError(f"--set {clip(text)}: expected PATH=VALUE, e.g. bending.tca2.temperature=100")
+        raise ScenarioError(f"{flag('--set')} {clip(text)}: expected PATH=VALUE, e.g. bending.tca2.temperature=100")
     path, value = text.split("=", 1)
     if not path.strip():
-        raise ScenarioError(f"--set {clip(text)}: empty path")
-    parsed = parse_value(value, f"--set {clip(path.strip())}") if value.strip() else None
+        raise ScenarioError(f"{flag('--set')} {clip(text)}: empty path")
+    parsed = parse_value(value, f"{flag('--set')} {clip(path.strip())}") if value.strip() else None
     return path.strip(), parsed
 
 
-def apply_overrides(raw, overrides, sources=None, label="--set"):
+def apply_overrides(raw, overrides, sources=None, label=None):
     """A copy of ``raw`` with every override applied; records their origin in ``sources`` as
-    ``LABEL PATH`` (``label``: where the overrides come from, e.g. a timeline event)."""
+    ``LABEL PATH`` (``label``: where the overrides come from, e.g. a timeline event; None: the
+    user's own, ``--set`` on the command line)."""
     items = overrides.items() if isinstance(overrides, dict) else [parse_override(o) for o in overrides]
     raw = copy.deepcopy(raw)
     for path, value in items:
         try:
             key_path = resolve(raw, path)
         except ScenarioError as exc:
-            if label == "--set":
+            if label is None:
                 raise
-            raise ScenarioError(f"{label} {str(exc).removeprefix('--set ')}") from None
+            raise ScenarioError(f"{label} {without_set(str(exc))}") from None
         _assign(raw, key_path, value)
         if sources is not None:             # it replaces any earlier override below it
             for earlier in [k for k in sources.overridden if k[:len(key_path)] == key_path]:
                 del sources.overridden[earlier]
-            sources.overridden[key_path] = f"{label} {path}"
+            sources.overridden[key_path] = f"{label or flag('--set')} {path}"
     return raw
+
+
+def without_set(message):
+    """An override's error message without its leading ``--set`` (or ``set``): for overrides
+    that are not the user's own (a timeline event's, a sequence step's)."""
+    return message.removeprefix(f"{flag('--set')} ")
 
 
 def resolve(raw, dotted):
@@ -62,12 +69,12 @@ def resolve(raw, dotted):
                     names = [a.get("name") for a in item.get("actuators") or [] if isinstance(a, dict)]
                     if rest[0] not in Module.model_fields and not _close(rest[0], Module.model_fields):
                         raise ScenarioError(
-                            f"--set {clip(dotted)}: module {head!r} has no actuator or key "
+                            f"{flag('--set')} {clip(dotted)}: module {head!r} has no actuator or key "
                             f"{shorten(rest[0])}{closest(rest[0], names + list(Module.model_fields))}")
                 return _walk(raw, path, rest, dotted)
     names = [i.get("name") for k in ("modules", "loads", "objects") for i in (raw.get(k) or [])
              if isinstance(i, dict) and isinstance(i.get("name"), str)]
-    raise ScenarioError(f"--set {clip(dotted)}: {shorten(head)} is not a top-level key, module, load or object"
+    raise ScenarioError(f"{flag('--set')} {clip(dotted)}: {shorten(head)} is not a top-level key, module, load or object"
                         f"{closest(head, list(RESERVED) + names)}")
 
 
@@ -98,12 +105,12 @@ def _walk(raw, path, rest, dotted):
                 index = int(part)
             if index is None:
                 names = [i.get("name") for i in node if isinstance(i, dict)]
-                raise ScenarioError(f"--set {clip(dotted)}: no item {shorten(part)}{closest(part, names)}")
+                raise ScenarioError(f"{flag('--set')} {clip(dotted)}: no item {shorten(part)}{closest(part, names)}")
             path, node = path + (index,), node[index]
         elif isinstance(node, dict) or node is None:
             path, node = path + (part,), (node or {}).get(part)
         else:
-            raise ScenarioError(f"--set {clip(dotted)}: cannot go inside the value at {shorten(part)}")
+            raise ScenarioError(f"{flag('--set')} {clip(dotted)}: cannot go inside the value at {shorten(part)}")
     return path
 
 
@@ -119,4 +126,4 @@ def _assign(raw, path, value):
     elif isinstance(node, list) and isinstance(path[-1], int):
         node[path[-1]] = value
     else:
-        raise ScenarioError(f"--set {'.'.join(map(str, path))}: not a mapping")
+        raise ScenarioError(f"{flag('--set')} {'.'.join(map(str, path))}: not a mapping")

@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from ..errors import ScenarioError, TcaError
+from ..errors import ScenarioError, TcaError, flag
 from ..model.history import carried_history, history_names_of
 from ..status import SolveStatus, Status
 from . import accuracy
@@ -248,7 +248,7 @@ def failure_text(failure):
                 "equilibrium); where it lands is not a static result")
     if failure.crossed:
         return ("it converged, but det J changes sign within the step: a fold or a bifurcation "
-                "lies between (sweep the parameter with --arclength to follow the branch)")
+                f"lies between (sweep the parameter with {flag('--arclength', 'arclength=True')} to follow the branch)")
     return f"it converged only off the branch (a jump to another branch, inconsistency {failure.jump:.2g})"
 
 

@@ -29,7 +29,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..errors import ScenarioError
+from ..errors import ScenarioError, flag
 from ..model.dynamics import KelvinVoigt
 from ..solvers.dynamics import RodDynamics, StepState
 
@@ -58,7 +58,7 @@ def check_dynamics(sim, dt):
     massless module."""
     low, high = STEP_RANGE
     if not low <= dt <= high:
-        raise ScenarioError(f"dynamics: --dt {dt:g} s is outside the range the dynamics is run on "
+        raise ScenarioError(f"dynamics: {flag('--dt')} {dt:g} s is outside the range the dynamics is run on "
                             f"({low:g} to {high:g} s)")
     for module in sim.robot.modules:
         if not module.weight_density > 0:

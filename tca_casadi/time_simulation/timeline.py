@@ -12,10 +12,10 @@ import copy
 
 import numpy as np
 
-from ..errors import ScenarioError
+from ..errors import ScenarioError, flag
 from ..model.laws import thermal_kinds
 from ..scenario.loader import validate
-from ..scenario.overrides import apply_overrides
+from ..scenario.overrides import apply_overrides, without_set
 from ..solvers.thermal import Drive, Schedule, integrate, steady_state
 from .heating import TimeSeries, follow_parameters
 
@@ -68,16 +68,16 @@ def check_run_size(sim, duration, dt, events=0):
     from ..resources import available_memory, readable_bytes
     count = duration / dt + 1 + 2 * events
     what = "time steps" if sim.scenario.dynamics.enabled else "output times"
-    asked = f"--duration {duration:g} s at --dt {dt:g} s"
+    asked = f"{flag('--duration')} {duration:g} s at {flag('--dt')} {dt:g} s"
     if not count <= MAX_OUTPUT_TIMES:
         number = f"{count:,.0f}" if count < 1e12 else f"{count:.3g}"
         raise ScenarioError(f"simulate: {asked} is {number} {what}; at most {MAX_OUTPUT_TIMES:,} are kept: "
-                            "raise --dt or shorten the duration")
+                            f"raise {flag('--dt')} or shorten the duration")
     need = count * (BYTES_PER_OUTPUT + BYTES_PER_NODE * _mesh_nodes(sim))
     available = available_memory()
     if available is not None and need > 0.8 * available:
         raise ScenarioError(f"simulate: {asked} is {count:,.0f} {what} of this robot, about {readable_bytes(need)} to "
-                            f"keep, more than the {readable_bytes(available)} available: raise --dt or shorten the duration")
+                            f"keep, more than the {readable_bytes(available)} available: raise {flag('--dt')} or shorten the duration")
 
 
 def _mesh_nodes(sim):
@@ -127,9 +127,9 @@ class TimeSimulation:
         ends = [e.at + (e.ramp or 0.0) for e in events]
         self.duration = float(duration or scenario.duration or (max(ends) if ends else 0.0))
         if not self.duration > 0:
-            raise ScenarioError("simulate needs a duration (the scenario's duration, --duration, or a timeline)")
+            raise ScenarioError(f"simulate needs a duration (the scenario's duration, {flag('--duration')}, or a timeline)")
         if not dt > 0:
-            raise ScenarioError(f"--dt must be positive (got {dt:g})")
+            raise ScenarioError(f"{flag('--dt')} must be positive (got {dt:g})")
         if ends and max(e.at for e in events) > self.duration:
             raise ScenarioError(f"the timeline's last event ({max(e.at for e in events):g} s) is after the "
                                 f"duration ({self.duration:g} s)")
@@ -200,7 +200,7 @@ class TimeSimulation:
                 raw = apply_overrides(raw, event.set, sources)
                 scenario = validate(raw, sources) if sources is not None else type(sim.scenario).model_validate(raw)
             except ScenarioError as exc:
-                raise ScenarioError(f"timeline[{k}] (at {event.at:g} s): {str(exc).replace('--set ', '', 1)}") from None
+                raise ScenarioError(f"timeline[{k}] (at {event.at:g} s): {without_set(str(exc))}") from None
             if sim.robot.structure_key(scenario) != structure:
                 raise ScenarioError(f"timeline[{k}] (at {event.at:g} s): {', '.join(event.set)} changes the robot's "
                                     "structure; a timeline may only set parameters and drive values")

@@ -123,7 +123,7 @@ def test_voltage_bounds_are_in_volts_and_a_temperature_dependent_resistance_is_r
     sim = Simulation.from_file(HEATING, VOLTAGE)
     planner = Plan(sim, target, horizon=24.0, nodes=4, bounds=["0 V", "3 V"])
     assert_allclose(planner.bounds, [[0.0, 9.0 / 20.0]], rtol=1e-12, atol=0)
-    with pytest.raises(Exception, match=r"--bounds for bending.tca2.drive.value \(a voltage drive, in V\): "
+    with pytest.raises(Exception, match=r"^bounds for bending.tca2.drive.value \(a voltage drive, in V\): "
                                         r"'3 W' is not a voltage"):
         Plan(sim, target, horizon=24.0, nodes=4, bounds=["0", "3 W"])
     varying = Simulation.from_file(HEATING, VOLTAGE + ["tca_types.nylon.resistance_temperature_coefficient=0.001"])

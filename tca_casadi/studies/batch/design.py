@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...errors import ScenarioError
+from ...errors import ScenarioError, flag
 
 DESIGNS = ("grid", "sobol", "latin", "random")
 #: values per axis of a grid when a range gives none
@@ -101,7 +101,7 @@ def build_design(axes, kind=None, samples=None, seed=0):
     :data:`DESIGNS` (default ``grid``, or ``random`` when an axis is a distribution),
     ``samples`` the number of a sampling design's points (default :data:`SAMPLES`)."""
     if not axes:
-        raise ScenarioError("study: nothing varies (give --vary, --monte-carlo or --rows)")
+        raise ScenarioError(f"study: nothing varies (give {flag('--vary')}, {flag('--monte-carlo')} or {flag('--rows')})")
     kind = kind or ("random" if any(a.distribution for a in axes) else "grid")
     if kind not in DESIGNS:
         raise ScenarioError(f"study: design {kind!r} is not one of {', '.join(DESIGNS)}")
@@ -113,7 +113,7 @@ def build_design(axes, kind=None, samples=None, seed=0):
         bad = [a.path for a in drawn if a.distribution]
         if bad:
             raise ScenarioError(f"study: a grid cannot sample the distribution of {', '.join(bad)}; "
-                                "use --design random, sobol or latin")
+                                f"use {flag('--design')} random, sobol or latin")
         unit = _grid([a.points or GRID_POINTS for a in drawn])
     else:
         unit = _sampled(kind, len(drawn), samples or SAMPLES, seed) if drawn else np.zeros((1, 0))

@@ -16,7 +16,7 @@ import os
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 
-from ...errors import ScenarioError
+from ...errors import ScenarioError, flag
 from .worker import solve_chunk
 
 #: times a local pool is restarted after a worker died
@@ -28,9 +28,9 @@ CONNECT_TIMEOUT = 5
 def executor_of(workers=None, scheduler=None):
     """``(kind, description)`` of where a study runs: ``serial``, ``processes`` or ``dask``."""
     if workers is not None and scheduler is not None:
-        raise ScenarioError("study: give --workers or --scheduler, not both")
+        raise ScenarioError(f"study: give {flag('--workers')} or {flag('--scheduler')}, not both")
     if workers is not None and workers < 1:
-        raise ScenarioError(f"study: --workers {workers}; give at least 1")
+        raise ScenarioError(f"study: {flag('--workers')} {workers}; give at least 1")
     scheduler = scheduler or (None if workers else os.environ.get("DASK_SCHEDULER_ADDRESS"))
     if scheduler is not None:
         return "dask", scheduler
@@ -80,7 +80,7 @@ def connect(scheduler):
     try:
         from dask.distributed import Client
     except ImportError:
-        raise ScenarioError("study --scheduler needs dask.distributed: pip install 'tca_casadi[studies]'") from None
+        raise ScenarioError(f"study {flag('--scheduler')} needs dask.distributed: pip install 'tca_casadi[studies]'") from None
     if isinstance(scheduler, Client):
         return scheduler, False
     try:

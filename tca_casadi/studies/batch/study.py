@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import ScenarioError
+from ...errors import ScenarioError, flag
 from .design import Axis, build_design, rows_design
 from .executors import describe, executor_of, run_dask, run_processes, run_serial
 from ..parameters import check_range, resolve_parameter, shown_as_given
@@ -331,15 +331,15 @@ class _Stream:
             return
         if resume and self.path.exists():
             from ...tables import read_json_lines
-            records = read_json_lines(self.path, "study --resume")
+            records = read_json_lines(self.path, f"study {flag('--resume')}")
             header = records[0] if records and isinstance(records[0], dict) else {}
             if header.get("plan") != digest:
-                raise ScenarioError(f"study --resume: {self.path} holds rows of another study (its plan differs); "
-                                    "run without --resume to start again")
+                raise ScenarioError(f"study {flag('--resume')}: {self.path} holds rows of another study (its plan differs); "
+                                    f"run without {flag('--resume')} to start again")
             for row in records[1:]:
                 if not isinstance(row, dict) or not isinstance(row.get("sample"), int):
-                    raise ScenarioError(f"study --resume: {self.path}: a row without its sample number; the file "
-                                        "is damaged (delete it, or run without --resume)")
+                    raise ScenarioError(f"study {flag('--resume')}: {self.path}: a row without its sample number; the file "
+                                        f"is damaged (delete it, or run without {flag('--resume')})")
                 self.rows[row["sample"]] = row
         else:
             self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -408,7 +408,7 @@ def read_rows(path):
     """``{PATH: values}`` from a CSV whose header names scenario paths (``[unit]`` suffixes are
     dropped: the values are in the path's unit); read by :func:`tca_casadi.tables.read_table`."""
     from ...tables import name_of, read_table
-    table = read_table(path, "study --rows", "samples file")
+    table = read_table(path, f"study {flag('--rows')}", "samples file")
     return {name_of(name): table.column(k) for k, name in enumerate(table.header)}
 
 

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...discretisation.measurements import measurable_names, measurement_function, quantity_kind
-from ...errors import ScenarioError, TcaError
+from ...errors import ScenarioError, TcaError, flag
 from ...scenario.checks import closest
 from ..batch.design import nearest_neighbour_order
 from ..parameters import resolve_parameter, shown_as_given
@@ -67,9 +67,9 @@ def read_measurements(path, robot, params, sigmas=None):
     one-line ScenarioErrors naming the column or line for a column that is neither, a unit that
     does not match, a value that is not a finite number."""
     from ...tables import read_table
-    table = read_table(path, "fit --data", "measurements file")
+    table = read_table(path, f"fit {flag('--data')}", "measurements file")
     if not table.rows:
-        raise ScenarioError(f"fit --data: {path} has no experiments (a header row and one row per experiment)")
+        raise ScenarioError(f"fit {flag('--data')}: {path} has no experiments (a header row and one row per experiment)")
     defaults = dict(DEFAULT_SIGMAS, **(sigmas or {}))
     inputs, input_columns, measured, measured_columns, sigma_columns = [], [], [], [], {}
     for column, text in enumerate(table.header):
@@ -83,16 +83,16 @@ def read_measurements(path, robot, params, sigmas=None):
             try:
                 parameter = resolve_parameter(robot, params, name)
             except ScenarioError:
-                raise ScenarioError(f"fit --data: column {text!r} is neither a scenario parameter nor a measured "
+                raise ScenarioError(f"fit {flag('--data')}: column {text!r} is neither a scenario parameter nor a measured "
                                     f"quantity{closest(name, measurable_names(robot) + robot.layout.names())}") from None
             inputs.append(parameter)
             input_columns.append((column, unit))
     if not measured:
-        raise ScenarioError(f"fit --data: {path} has no measured column (e.g. tip_x [m]; measurable: "
+        raise ScenarioError(f"fit {flag('--data')}: {path} has no measured column (e.g. tip_x [m]; measurable: "
                             f"{', '.join(measurable_names(robot)[:8])}, ...)")
     for name in sigma_columns:
         if name not in measured:
-            raise ScenarioError(f"fit --data: column sigma_{name} has no measured column {name}")
+            raise ScenarioError(f"fit {flag('--data')}: column sigma_{name} has no measured column {name}")
     n = len(table.rows)
     values = np.empty((n, len(measured)))
     spread = np.empty((n, len(measured)))
@@ -136,7 +136,7 @@ def _input(table, k, column, unit, parameter):
     try:
         return float(parameter.to_si(f"{value!r} {unit}", f"column {table.header[column]!r}"))
     except ScenarioError as exc:
-        raise ScenarioError(f"fit --data: {exc}") from None
+        raise ScenarioError(f"fit {flag('--data')}: {exc}") from None
 
 
 class Fit:
@@ -164,7 +164,7 @@ class Fit:
         from .thermal import HeatingCurve, ThermalFitModel, is_time_series, read_heating_curve, thermal_parameter
         self.sim, self._model = sim, None
         if not params:
-            raise ScenarioError("fit: no parameter to fit (give --param PATH)")
+            raise ScenarioError(f"fit: no parameter to fit (give {flag('--param')} PATH)")
         self.time_series = isinstance(data, HeatingCurve) or (not isinstance(data, Measurements) and is_time_series(data))
         if self.time_series:                         # a heating curve: the thermal constants
             self.data = data if isinstance(data, HeatingCurve) else \
@@ -180,7 +180,7 @@ class Fit:
             inputs = {p.name for p in self.data.inputs}
             for p in self.parameters:
                 if p.name in inputs:
-                    raise ScenarioError(f"fit --param {p.path}: it is an input column of the data too")
+                    raise ScenarioError(f"fit {flag('--param')} {p.path}: it is an input column of the data too")
             nominal = np.array([p.value(sim.params) for p in self.parameters])
         self.nominal, self.scale = nominal, np.where(nominal != 0, np.abs(nominal), 1.0)
         self.bounds = self._bounds(bounds or {})
@@ -189,9 +189,9 @@ class Fit:
                                for p, v in zip(self.parameters, nominal)]
         self.absolute_sigma, self.starts, self.seed = absolute_sigma, int(starts), int(seed)
         if self.starts < 1:
-            raise ScenarioError(f"fit --starts {starts}: give at least 1")
+            raise ScenarioError(f"fit {flag('--starts')} {starts}: give at least 1")
         if self.starts > 1 and not np.all(np.isfinite(self.bounds)):
-            raise ScenarioError("fit --starts needs --bounds on every parameter (the starts are spread in them)")
+            raise ScenarioError(f"fit {flag('--starts')} needs {flag('--bounds')} on every parameter (the starts are spread in them)")
         self.train, self.test = self._split(holdout)
         residuals = len(self.train) * len(self.data.names)
         if residuals < len(self.parameters):
@@ -220,7 +220,7 @@ class Fit:
         try:
             return resolve_parameter(self.sim.robot, self.sim.params, path)
         except ScenarioError:
-            raise ScenarioError(f"fit --param {path}: not a parameter (structure cannot be fitted); parameters: "
+            raise ScenarioError(f"fit {flag('--param')} {path}: not a parameter (structure cannot be fitted); parameters: "
                                 f"{', '.join(self.sim.robot.layout.names())}{closest(path, self.sim.robot.layout.names())}") from None
 
     def _bounds(self, given):
@@ -228,14 +228,14 @@ class Fit:
         paths = [p.path for p in self.parameters]
         for path, (low, high) in given.items():
             if path not in paths:
-                raise ScenarioError(f"fit --bounds {path}: not one of the fitted parameters ({', '.join(paths)})")
+                raise ScenarioError(f"fit {flag('--bounds')} {path}: not one of the fitted parameters ({', '.join(paths)})")
             j = paths.index(path)
             parameter = self.parameters[j]
             low, high = parameter.to_si(low, "low bound"), parameter.to_si(high, "high bound")
             if not low < high:
-                raise ScenarioError(f"fit --bounds {path}: [{low:g}, {high:g}] is empty")
+                raise ScenarioError(f"fit {flag('--bounds')} {path}: [{low:g}, {high:g}] is empty")
             if not low <= self.nominal[j] <= high:
-                raise ScenarioError(f"fit --bounds {path}: [{low:g}, {high:g}] {parameter.unit} excludes the nominal "
+                raise ScenarioError(f"fit {flag('--bounds')} {path}: [{low:g}, {high:g}] {parameter.unit} excludes the nominal "
                                     f"value {self.nominal[j]:g} {parameter.unit}")
             out[j] = low, high
         return out
@@ -245,10 +245,10 @@ class Fit:
         if holdout is None or holdout == 0:
             return np.arange(n), np.arange(0)
         if not 0 < holdout < 1:
-            raise ScenarioError(f"fit --holdout {holdout}: give a fraction between 0 and 1")
+            raise ScenarioError(f"fit {flag('--holdout')} {holdout}: give a fraction between 0 and 1")
         count = int(round(holdout * n))
         if count < 1 or count >= n:
-            raise ScenarioError(f"fit --holdout {holdout}: leaves {count} of {n} experiments out; give a fraction "
+            raise ScenarioError(f"fit {flag('--holdout')} {holdout}: leaves {count} of {n} experiments out; give a fraction "
                                 "that keeps at least one on each side")
         test = np.sort(np.random.default_rng(self.seed).choice(n, count, replace=False))
         return np.setdiff1d(np.arange(n), test), test
@@ -308,11 +308,11 @@ class Fit:
         from scipy.optimize import least_squares
         paths = [p.path for p in self.parameters]
         if path not in paths:
-            raise ScenarioError(f"fit --profile {path}: not one of the fitted parameters ({', '.join(paths)})")
+            raise ScenarioError(f"fit {flag('--profile')} {path}: not one of the fitted parameters ({', '.join(paths)})")
         j = paths.index(path)
         fitted = result.parameters[j]
         if not fitted.identifiable:
-            raise ScenarioError(f"fit --profile {path}: it cannot be identified from these data")
+            raise ScenarioError(f"fit {flag('--profile')} {path}: it cannot be identified from these data")
         theta_hat = np.array([q.value for q in result.parameters])
         free = np.array([k != j for k in range(len(paths))])
         values = fitted.value + fitted.standard_error * np.linspace(-span, span, points)

@@ -9,6 +9,7 @@ import numpy as np
 from ...output import atomic_path, write_json
 from ...results import ResultAPI, status_of
 from ...status import Status
+from ...errors import flag
 
 #: Fisher information condition numbers above this are reported (parameters not told apart)
 CONDITION_LIMIT = 1e10
@@ -251,12 +252,12 @@ def misfit_warnings(scale, dof, absolute_sigma):
     high = float(np.sqrt(chi2.ppf(1 - MISFIT_LEVEL, dof) / dof))
     low = float(np.sqrt(chi2.ppf(MISFIT_LEVEL, dof) / dof))
     if scale > high:
-        effect = ("the intervals assume the sigmas (--absolute-sigma) and are too narrow" if absolute_sigma
+        effect = (f"the intervals assume the sigmas ({flag('--absolute-sigma')}) and are too narrow" if absolute_sigma
                   else "the intervals are widened by it")
         return [f"the residuals are {scale:.3g} times their sigmas, more than chance allows ({high:.3g} at most, "
                 f"{dof} degrees of freedom): the model does not fit these data or the sigmas are too small; {effect}"]
     if scale < low:
-        effect = ("the intervals assume the sigmas (--absolute-sigma) and are too wide" if absolute_sigma
+        effect = (f"the intervals assume the sigmas ({flag('--absolute-sigma')}) and are too wide" if absolute_sigma
                   else "the intervals are narrowed by it")
         return [f"the residuals are {scale:.3g} of their sigmas, less than chance allows ({low:.3g} at least, "
                 f"{dof} degrees of freedom): the sigmas are larger than the scatter of these data; {effect}"]

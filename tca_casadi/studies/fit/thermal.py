@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import ScenarioError
+from ...errors import ScenarioError, flag
 from ...units import ureg
 from ...tables import name_of, unit_of
 
@@ -31,7 +31,7 @@ UNITS = {"heat_capacity": "J/K", "conductance": "W/K"}
 def is_time_series(path):
     """True if a measurement CSV has a time column ``t`` (ScenarioError if it cannot be read)."""
     from ...tables import name_of, read_table
-    return any(name_of(text) == "t" for text in read_table(path, "fit --data", "measurements file").header)
+    return any(name_of(text) == "t" for text in read_table(path, f"fit {flag('--data')}", "measurements file").header)
 
 
 @dataclass
@@ -54,10 +54,10 @@ def read_heating_curve(path, robot, sigma=None):
     """A :class:`HeatingCurve` from a CSV (read by :func:`tca_casadi.tables.read_table`);
     one-line ScenarioErrors naming the column or line."""
     from ...tables import read_table
-    table = read_table(path, "fit --data", "heating curve")
+    table = read_table(path, f"fit {flag('--data')}", "heating curve")
     header, n = table.header, len(table.rows)
     if not n:
-        raise ScenarioError(f"fit --data: {path} has a header but no rows")
+        raise ScenarioError(f"fit {flag('--data')}: {path} has a header but no rows")
     keys = [a.key for a in robot.thermal_actuators]
     time_column, measured, sigmas = None, [], {}
     for column, text in enumerate(header):
@@ -69,13 +69,13 @@ def read_heating_curve(path, robot, sigma=None):
         elif name.endswith(".temperature") and name.rsplit(".", 1)[0] in keys:
             measured.append((name, column, unit))
         else:
-            raise ScenarioError(f"fit --data: column {text!r} of a time series (it has a t column) must be a TCA's "
+            raise ScenarioError(f"fit {flag('--data')}: column {text!r} of a time series (it has a t column) must be a TCA's "
                                 f"temperature ({', '.join(k + '.temperature' for k in keys)}) or its sigma_")
     if not measured:
-        raise ScenarioError(f"fit --data: {path} has a t column but no measured temperature column")
+        raise ScenarioError(f"fit {flag('--data')}: {path} has a t column but no measured temperature column")
     times = np.array([_value(table, k, time_column[0], time_column[1], "s") for k in range(n)])
     if np.any(np.diff(times) <= 0) or times[0] < 0:
-        raise ScenarioError(f"fit --data: the t column of {path} must start at 0 or later and increase")
+        raise ScenarioError(f"fit {flag('--data')}: the t column of {path} must start at 0 or later and increase")
     values = np.column_stack([[_value(table, k, column, unit or "degC", "degC") for k in range(n)]
                               for _, column, unit in measured])
     spread = np.full(values.shape, float(sigma or TEMPERATURE_SIGMA))
@@ -84,7 +84,7 @@ def read_heating_curve(path, robot, sigma=None):
             column, unit = sigmas[name]
             spread[:, j] = [_value(table, k, column, unit or "K", "K", difference=True) for k in range(n)]
     if not np.all(spread > 0):
-        raise ScenarioError("fit --data: every sigma must be positive")
+        raise ScenarioError(f"fit {flag('--data')}: every sigma must be positive")
     return HeatingCurve(times, [m[0] for m in measured], values, spread, str(path))
 
 
@@ -96,7 +96,7 @@ def _value(table, k, column, unit, target, difference=False):
             unit = {"degC": "K", "°C": "K"}.get(unit, unit)
         return float(ureg.Quantity(value, unit).to(target).magnitude)
     except Exception:
-        raise ScenarioError(f"fit --data: column {table.header[column]!r}: [{unit}] is not a unit of {target}") from None
+        raise ScenarioError(f"fit {flag('--data')}: column {table.header[column]!r}: [{unit}] is not a unit of {target}") from None
 
 
 @dataclass
@@ -141,7 +141,7 @@ def thermal_parameter(scenario, path):
     if len(parts) == 4 and f"{parts[0]}.{parts[1]}" in heated and parts[2] == "thermal" and parts[3] in THERMAL_KEYS:
         return ThermalParameter(path, parts[1], parts[3])
     types = ", ".join(f"{t}.thermal.{k}" for t in sorted(heated) for k in THERMAL_KEYS)
-    raise ScenarioError(f"fit --param {path}: a time-series fit takes a TCA type's (or an SMA type's) "
+    raise ScenarioError(f"fit {flag('--param')} {path}: a time-series fit takes a TCA type's (or an SMA type's) "
                         f"thermal constants ({types})")
 
 
@@ -157,7 +157,7 @@ class ThermalFitModel:
         for name in data.names:
             key = name.rsplit(".", 1)[0]
             if key not in keys:
-                raise ScenarioError(f"fit --data: {name} is measured, but {key} has no power, voltage, current or "
+                raise ScenarioError(f"fit {flag('--data')}: {name} is measured, but {key} has no power, voltage, current or "
                                     "setpoint drive in the scenario: its temperature is set, not predicted")
         self.columns = [keys.index(name.rsplit(".", 1)[0]) for name in data.names]
         self.nominal = np.array([self._nominal(p) for p in parameters])
@@ -167,7 +167,7 @@ class ThermalFitModel:
         """The constant's value in the scenario: that of the first heated TCA of its type."""
         index = next((k for k, a in enumerate(self.timed.heated) if a.type_path == parameter.type_path), None)
         if index is None:
-            raise ScenarioError(f"fit --param {parameter.path}: no heated TCA (with a power, voltage, current or "
+            raise ScenarioError(f"fit {flag('--param')} {parameter.path}: no heated TCA (with a power, voltage, current or "
                                 f"setpoint drive) is of type {parameter.tca_type}")
         return getattr(self.timed.laws[index], parameter.key)
 

@@ -30,7 +30,7 @@ import time
 import casadi as ca
 import numpy as np
 
-from ...errors import ScenarioError
+from ...errors import ScenarioError, flag
 from ...model.rotations import ROTATION, rotation_angle, rotation_numpy
 from ...scenario.checks import closest
 from ...solvers.continuation import walk_branch
@@ -76,7 +76,7 @@ class InverseStatics:
         self.tolerance, self.angle_tolerance = float(tolerance), float(angle_tolerance)
         self.regularisation, self.orientation_weight = float(regularisation), float(orientation_weight)
         if int(starts) < 1:
-            raise ScenarioError(f"starts (--starts) must be at least 1, got {starts}")
+            raise ScenarioError(f"starts ({flag('--starts')}) must be at least 1, got {starts}")
         self.starts = int(starts)
         self._forward_cache = {}
         self._start_linearisation = {}
@@ -102,7 +102,7 @@ class InverseStatics:
         """The target of the scenario's ``inverse:`` section (:class:`ScenarioError` if none)."""
         section = self.sim.scenario.inverse
         if section is None or section.target is None:
-            raise ScenarioError("no target: give one (--target-position X Y Z) or an inverse.target "
+            raise ScenarioError(f"no target: give one ({flag('--target-position')} X Y Z) or an inverse.target "
                                 "in the scenario")
         given = section.target
         return Target.create(given.position, given.direction, given.orientation, point or given.point)
@@ -115,7 +115,7 @@ class InverseStatics:
             low, high = actuator.law.inverse_range
             if bounds is None and not (np.isfinite(low) and np.isfinite(high)):
                 raise ScenarioError(f"{parameter.path}: its law's range [{low:g}, {high:g}] is not finite; "
-                                    "give bounds (--bounds LOW HIGH)")
+                                    f"give bounds ({flag('--bounds')} LOW HIGH)")
             if bounds is None:
                 out.append((low, high))
                 continue

@@ -5,7 +5,7 @@ from typing import Optional
 
 import numpy as np
 
-from ...errors import ScenarioError
+from ...errors import ScenarioError, flag
 
 
 @dataclass
@@ -82,7 +82,7 @@ def read_targets(path, point="tip"):
     qw, qx, qy, qz (an orientation); header names may carry units (``x [m]``). Read by
     :func:`tca_casadi.tables.read_table` (one-line errors for any bad file)."""
     from ...tables import name_of, read_table
-    table = read_table(path, "inverse --path", "targets file", required=("x", "y", "z"))
+    table = read_table(path, f"inverse {flag('--path')}", "targets file", required=("x", "y", "z"))
     columns = {name_of(name).lower(): k for k, name in enumerate(table.header)}
     targets = []
     for k in range(len(table.rows)):
@@ -91,9 +91,9 @@ def read_targets(path, point="tip"):
                                          _take(table, k, columns, ("qw", "qx", "qy", "qz")), point))
         except ScenarioError as exc:
             message = str(exc)
-            raise ScenarioError(message if message.startswith("inverse --path") else f"{table.where(k)}: {message}") from None
+            raise ScenarioError(message if message.startswith(f"inverse {flag('--path')}") else f"{table.where(k)}: {message}") from None
     if not targets:
-        raise ScenarioError(f"inverse --path: {path}: no targets (a header x, y, z, then one row per target)")
+        raise ScenarioError(f"inverse {flag('--path')}: {path}: no targets (a header x, y, z, then one row per target)")
     return targets
 
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...errors import ScenarioError
+from ...errors import ScenarioError, flag
 from ...solvers.continuation import ArclengthFollower, path_parameters, walk_branch
 from ..parameters import check_range, resolve_parameters, shown_as_given
 from .result import SweepResult, find_events
@@ -60,7 +60,7 @@ class Sweep:
         if isinstance(paths, str):
             paths = [paths]
         if not paths:
-            raise ScenarioError("a sweep needs at least one parameter (--param PATH)")
+            raise ScenarioError(f"a sweep needs at least one parameter ({flag('--param')} PATH)")
         if int(steps) < 2:
             raise ScenarioError(f"a sweep needs at least 2 steps, got {steps}")
         self.sim, self.steps, self.arclength = sim, int(steps), bool(arclength)
@@ -168,7 +168,7 @@ class Sweep:
                     f"{last.sigma_min:.2e}, {sigma:.2g} x its value at the start; the branch's "
                     f"rate of change {rate:.3g} x"
                     + ("; its determinant changes sign within the step" if failure.crossed else "")
-                    + "): a fold (turning point) or a bifurcation. --arclength (arclength=True) "
+                    + f"): a fold (turning point) or a bifurcation. {flag('--arclength', 'arclength=True')} "
                       "follows the branch around a fold")
         if failure.trial.converged:
             return (f"{text}: the solver converged only off the branch (a jump to another branch; "
