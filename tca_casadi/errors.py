@@ -42,8 +42,10 @@ class ScenarioError(TcaError, ValueError):
     """A scenario (file, dict or override) is invalid. The message names key path and line."""
 
 
-class ModelError(TcaError):
-    """A scenario is valid but asks the model for something it cannot represent."""
+class ModelError(ScenarioError):
+    """A scenario is valid but asks the model for something it cannot represent (the midpoint
+    rule with contact, the dynamics of a massless rod, a plan through a resistance that changes
+    with temperature); bad input all the same (the command line's exit code 2)."""
 
 
 class SolverError(TcaError):

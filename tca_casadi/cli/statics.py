@@ -45,7 +45,7 @@ def _other_muscles(robot):
 
 def _print_thermal(scenario, robot):
     """Each TCA's lumped thermal model (heat capacity, conductance, time constant)."""
-    from ..model.laws import thermal_kinds
+    from ..catalogue import thermal_kinds
     if robot.thermal_actuators:
         print(f"thermal (ambient {scenario.ambient_temperature:g} degC):")
     for actuator in robot.thermal_actuators:

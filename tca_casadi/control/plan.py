@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ScenarioError, SolverError, flag
+from ..errors import ModelError, ScenarioError, SolverError, flag
 from ..results import ResultAPI
 from ..solvers.thermal import steady_state, zero_order_hold
 from ..status import SolveStatus, Status
@@ -351,7 +351,7 @@ class Plan:
                 f"{key} has a {kind} drive" for key, kind in other.items()))
         for actuator, law in zip(self.heated, self.laws):
             if kinds[actuator.key] != "power" and law.resistance_coefficient != 0:
-                raise ScenarioError(f"plan: {actuator.key} has a {kinds[actuator.key]} drive through a resistance that "
+                raise ModelError(f"plan: {actuator.key} has a {kinds[actuator.key]} drive through a resistance that "
                                     "changes with temperature (its type's resistance_temperature_coefficient is "
                                     f"{law.resistance_coefficient:g} 1/K): its power is then not a function of its "
                                     "input alone; plan with a power drive, or set the coefficient to 0")

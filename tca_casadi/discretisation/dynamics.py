@@ -30,7 +30,7 @@ size and every integrator (:mod:`tca_casadi.solvers.dynamics` sets ``c0`` and th
 import casadi as ca
 import numpy as np
 
-from ..errors import ScenarioError
+from ..errors import ModelError
 from ..model.bodies import body_motion, body_rotation, box_moments, inertial_wrench
 from ..model.boundary import add, connector_of, loads_at
 from ..model.dynamics import inertia_per_length, inertial_loads, point_inertia, point_mass_of, velocity_rates
@@ -48,7 +48,7 @@ def time_scale(module):
     order of its first bending frequency)."""
     mass = module.weight_density
     if not mass > 0:
-        raise ScenarioError(f"dynamics: module {module.name} has no mass (its material's density is 0)")
+        raise ModelError(f"dynamics: module {module.name} has no mass (its material's density is 0)")
     return float(np.sqrt(mass * module.length ** 4 / module.bending_stiffness))
 
 

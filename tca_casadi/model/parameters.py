@@ -39,11 +39,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..catalogue import declarations
+
 #: keys of the scenario that are neither parameters nor structure (they never change a solve)
 IGNORED = (("name",), ("description",), ("inverse",), ("sequence",), ("ambient_temperature",),
            ("duration",), ("timeline",), ("dynamics",))
-#: keys of each TCA type that the statics never read (the thermal model's)
-TCA_THERMAL = ("thermal", "resistance", "resistance_temperature_coefficient")
 #: keys of each grasped object that only drawings use
 OBJECT_DRAWING = ("position", "yaw", "size")
 
@@ -101,10 +101,10 @@ class ParameterLayout:
             for key in OBJECT_DRAWING if not item.get("contact") else ():   # a free body's are built in
                 item.pop(key, None)
         for tca_type in data.get("tca_types", {}).values():
-            for key in TCA_THERMAL:
+            for key in declarations()["tca"].THERMAL_KEYS:
                 tca_type.pop(key, None)
         for muscle_type in data.get("muscle_types", {}).values():
-            for key in _muscle_law(muscle_type.get("kind")).THERMAL_KEYS:
+            for key in declarations()[muscle_type.get("kind")].THERMAL_KEYS:
                 muscle_type.pop(key, None)
         for module in data.get("modules", []):
             module.pop("thermal_coupling", None)       # simulate's, never the statics'
@@ -141,12 +141,10 @@ def declare(scenario, actuators, point_loads, distributed):
     put("base.quaternion", scenario.base.orientation.as_quaternion(), "dimensionless", ("base", "orientation"))
     for name in dict.fromkeys(module.material for module in scenario.modules):
         _material(put, name, scenario.materials[name])
-    used = dict.fromkeys(a.type for m in scenario.modules for a in m.actuators if a.kind == "tca")
-    for name in used:
-        _tca_type(put, name, scenario.tca_types[name])
-    used = dict.fromkeys(a.type for m in scenario.modules for a in m.actuators if a.kind not in ("tca", "tendon"))
-    for name in used:
-        _muscle_type(put, name, scenario.muscle_types[name])
+    typed = dict.fromkeys((declarations()[a.kind], a.type) for m in scenario.modules for a in m.actuators
+                          if a.kind in declarations())
+    for declaration, name in sorted(typed, key=lambda pair: pair[0].TYPES_KEY != "tca_types"):   # TCAs first
+        _type_parameters(put, declaration, name, getattr(scenario, declaration.TYPES_KEY)[name])
     for actuator in actuators:
         source, config = _actuator_source(scenario, actuator)
         for key in actuator.placement_keys:
@@ -205,47 +203,18 @@ def _material(put, name, material):
     put(prefix + "density", material.density, "density", source + ("density",))
 
 
-#: a TCA type's parameters: key -> unit kind (``fiber_length`` only when the scenario gives it)
-TCA_KEYS = {"fiber_radius": "length", "coil_radius": "length", "pitch_angle": "angle",
-            "fiber_length": "length", "reference_temperature": "temperature",
-            "untwist.c2": "untwist_c2", "untwist.c1": "untwist_c1", "untwist.c0": "untwist_c0",
-            "shear_modulus.a2": "pressure_per_force2", "shear_modulus.a1": "pressure_per_force",
-            "shear_modulus.a0": "pressure"}
-
-
 def _input_rest(actuator, config):
     """``(rest rule, unit kind)`` of an actuator's own parameter (its input or tension)."""
-    if actuator.kind == "tca":
-        return f"tca_types.{config.type}.reference_temperature", "temperature"
     if actuator.kind == "tendon":
         return 0.0, {"tension": "force", "displacement": "length"}[actuator.control]
     law = actuator.law
-    rest = f"muscle_types.{config.type}.{law.REST_INPUT}" if law.REST_INPUT else law.INPUT[2]
+    rest = f"{law.TYPES_KEY}.{config.type}.{law.REST_INPUT}" if law.REST_INPUT else law.INPUT[2]
     return rest, law.INPUT[1]
 
 
-def _muscle_law(kind):
-    from .laws import muscles
-    return muscles()[kind]
-
-
-def _muscle_type(put, name, config):
-    """A muscle type's constants (its law's ``PARAMETERS``; a custom law's ``parameters``)."""
-    law = _muscle_law(config.kind)
-    if hasattr(law, "parameter_entries"):
-        entries = law.parameter_entries(config)
-    else:
-        entries = [(p.name, p.kind, getattr(config, p.name)) for p in law.PARAMETERS]
-    for key, kind, value in entries:
+def _type_parameters(put, declaration, name, config):
+    """An actuator type's constants as NLP parameters (its declaration's ``parameter_entries``)."""
+    section = declaration.TYPES_KEY
+    for key, kind, value in declaration.parameter_entries(config):
         if value is not None:
-            put(f"muscle_types.{name}.{key}", value, kind, ("muscle_types", name) + tuple(key.split(".")))
-
-
-def _tca_type(put, name, tca_type):
-    for key, kind in TCA_KEYS.items():
-        value = tca_type
-        for part in key.split("."):
-            value = getattr(value, part)
-        if value is None:
-            continue
-        put(f"tca_types.{name}.{key}", value, kind, ("tca_types", name) + tuple(key.split(".")))
+            put(f"{section}.{name}.{key}", value, kind, (section, name) + tuple(key.split(".")))

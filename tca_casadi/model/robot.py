@@ -18,8 +18,7 @@ from typing import Optional
 import numpy as np
 
 from ..scenario.checks import fail, route_span
-from .laws import muscle_module, muscles
-from .laws.tca import TcaLaw
+from .laws import laws, muscle_module
 from .laws.tendon import TendonLaw
 from .parameters import OBSTACLE_SIZES, ParameterLayout, declare  # noqa: F401  (ParameterLayout: re-exported)
 from .routes import ANGLE_KEY, make_route, reference_path_length
@@ -94,7 +93,7 @@ class ActuatorModel:
         """Where its type lives: ``tca_types.NAME`` or ``muscle_types.NAME`` (None: a tendon)."""
         if self.tca_type is None:
             return None
-        return f"{'tca_types' if self.kind == 'tca' else 'muscle_types'}.{self.tca_type}"
+        return f"{self.law.TYPES_KEY}.{self.tca_type}"
 
     @property
     def is_muscle(self):
@@ -116,10 +115,7 @@ class ActuatorModel:
 
     def thermal_law(self, scenario):
         """Its lumped :class:`~tca_casadi.model.thermal.ThermalLaw` (``THERMAL`` laws only)."""
-        from .thermal import thermal_law
-        if self.kind == "tca":
-            return thermal_law(scenario.tca_types[self.tca_type], self.law.fiber_length)
-        return muscle_module(self.kind).thermal_law(scenario.muscle_types[self.tca_type], self.law)
+        return muscle_module(self.kind).thermal_law(getattr(scenario, self.law.TYPES_KEY)[self.tca_type], self.law)
 
     @property
     def unknown_tension(self):
@@ -509,12 +505,10 @@ def _actuator(scenario, index, config, a_index, a_config):
     xi_star = np.array(list(config.precurvature) + [0.0, 0.0, 1.0])
     reference_length = reference_path_length(route, xi_star)
     law, control, tca_type = None, "temperature", None
-    if a_config.kind == "tca":
+    if a_config.kind in laws():                         # a TCA or a muscle: its type drives its law
         tca_type = a_config.type
-        law = TcaLaw.from_type(scenario.tca_types[a_config.type], reference_length)
-    elif a_config.kind in muscles():
-        tca_type = a_config.type
-        law = muscles()[a_config.kind].from_type(scenario.muscle_types[a_config.type], reference_length)
+        law_class = laws()[a_config.kind]
+        law = law_class.from_type(getattr(scenario, law_class.TYPES_KEY)[a_config.type], reference_length)
         control = law.INPUT[0]
     else:
         control = a_config.control

@@ -1,5 +1,6 @@
 """Checks that need the whole scenario: names unique and resolvable, spans and load positions
 inside their module. Each failure is one line naming file, line and key path."""
+from ..catalogue import declarations
 from ..errors import ScenarioError
 from .schema import Scenario
 from .sources import did_you_mean, located
@@ -131,15 +132,8 @@ def _check_module(scenario, index, module, raw, sources):
     _unique_names(module.actuators, path + ("actuators",), raw, sources)
     for a_index, actuator in enumerate(module.actuators):
         a_path = path + ("actuators", a_index)
-        if actuator.kind == "tca" and actuator.type not in scenario.tca_types:
-            fail(raw, sources, a_path + ("type",),
-                 f"unknown TCA type {actuator.type!r}{closest(actuator.type, scenario.tca_types)}")
-        if actuator.kind == "tca":
-            problem = temperature_problem(actuator.temperature, scenario.tca_types[actuator.type], actuator.type)
-            if problem:
-                fail(raw, sources, a_path + ("temperature",), problem)
-        if actuator.kind not in ("tca", "tendon"):
-            _check_muscle(scenario, module, actuator, a_path, raw, sources)
+        if actuator.kind in declarations():                  # a TCA or a muscle: it has a type
+            _check_typed(scenario, actuator, declarations()[actuator.kind], a_path, raw, sources)
         _check_span(route_span(actuator.route, module.length), module, a_path + ("route",), raw, sources)
     _check_coupling(module, path, raw, sources)
 
@@ -155,23 +149,20 @@ def _check_muscle_types(scenario, raw, sources):
                 fail(raw, sources, ("muscle_types", name, "entry_point"), str(error))
 
 
-def _check_muscle(scenario, module, actuator, path, raw, sources):
-    """A muscle's type exists and is of its kind; its input lies in the law's range."""
-    from ..model.laws import muscles
-    from ..model.laws.base import range_problem
-    types = scenario.muscle_types
+def _check_typed(scenario, actuator, declaration, path, raw, sources):
+    """A TCA's or muscle's type exists (in its declaration's section) and is of its kind; its
+    input lies in the type's range."""
+    section = declaration.TYPES_KEY
+    types = getattr(scenario, section)
     if actuator.type not in types:
         fail(raw, sources, path + ("type",),
-             f"unknown {actuator.kind} type {actuator.type!r}{closest(actuator.type, types)}")
+             f"unknown {declaration.NAME or declaration.KIND} type {actuator.type!r}{closest(actuator.type, types)}")
     config = types[actuator.type]
-    if config.kind != actuator.kind:
-        fail(raw, sources, path + ("type",), f"muscle_types.{actuator.type} is a {config.kind} type, "
+    if getattr(config, "kind", declaration.KIND) != declaration.KIND:
+        fail(raw, sources, path + ("type",), f"{section}.{actuator.type} is a {config.kind} type, "
              f"not a {actuator.kind} one")
-    law = muscles()[actuator.kind]
-    values = {k: getattr(config, k) for k in law.RANGE_KEYS}
-    nominal = law(reference_length=1.0, **values)         # the range only
-    input_name = law.INPUT[0]
-    problem = range_problem(nominal, getattr(actuator, input_name), type_path=f"muscle_types.{actuator.type}")
+    input_name = declaration.INPUT[0]
+    problem = declaration.input_problem_of(config, getattr(actuator, input_name), f"{section}.{actuator.type}")
     if problem:
         fail(raw, sources, path + (input_name,), problem)
 
@@ -181,7 +172,7 @@ def _check_coupling(module, path, raw, sources):
     coupling = module.thermal_coupling
     if coupling is None or coupling.between is None:
         return
-    from ..model.laws import thermal_kinds
+    from ..catalogue import thermal_kinds
     tcas = [a.name for a in module.actuators if a.kind in thermal_kinds()]
     for k, pair in enumerate(coupling.between):
         for j, name in enumerate(pair):
@@ -190,17 +181,6 @@ def _check_coupling(module, path, raw, sources):
                      f"not a TCA of module {module.name!r} (nor another heated muscle): {name!r}{closest(name, tcas)}")
         if pair[0] == pair[1]:
             fail(raw, sources, path + ("thermal_coupling", "between", k), "a TCA cannot be coupled to itself")
-
-
-def temperature_problem(temperature, tca_type, type_name):
-    """Why ``temperature`` [degC] lies outside a TCA type's validated range, or None."""
-    for bound, beyond, word in (("max_temperature", temperature > tca_type.max_temperature, "above"),
-                                ("min_temperature", temperature < tca_type.min_temperature, "below")):
-        if beyond:
-            limit = getattr(tca_type, bound)
-            return (f"{temperature:g} degC is {word} the TCA type's {bound} ({limit:g} degC), the range "
-                    f"its law is validated for; to go there, set tca_types.{type_name}.{bound}")
-    return None
 
 
 def route_span(route, length):

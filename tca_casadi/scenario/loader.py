@@ -38,7 +38,7 @@ def load_scenario(source, overrides=(), allow_code=False):
 def refuse_code(raw, sources):
     """ScenarioError, one line per custom law, naming the module and file its entry point would
     import (found without importing it), when the scenario would run Python code."""
-    from ..model.laws.custom import describe_entry_point
+    from ..catalogue.custom import describe_entry_point
     types = raw.get("muscle_types")
     problems = []
     for name, config in (types.items() if isinstance(types, dict) else ()):

@@ -380,8 +380,8 @@ def _law_field(kind_or_type, default, positive=False):
 
 
 def _muscle_type_model(law):
-    """The ``muscle_types`` entry of one muscle kind, made from its law's declarations
-    (:mod:`tca_casadi.model.laws.base`)."""
+    """The ``muscle_types`` entry of one muscle kind, made from its declarations
+    (:mod:`tca_casadi.catalogue`)."""
     fields = {"kind": (Literal[law.KIND], ...)}
     for p in law.PARAMETERS:
         fields[p.name] = _law_field(p.kind, p.default, p.positive)
@@ -416,8 +416,8 @@ def _muscle_actuator_model(law):
 
 
 def _muscles():
-    from ..model.laws import muscles
-    return muscles()
+    from ..catalogue import muscle_declarations
+    return muscle_declarations()
 
 
 _MUSCLE_TYPES = [_muscle_type_model(law) for law in _muscles().values()]

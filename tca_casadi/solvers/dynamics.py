@@ -15,7 +15,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..discretisation.dynamics import DynamicCollocationNLP
-from ..errors import ScenarioError
+from ..errors import ModelError
 from ..model.balance import load_markers
 from ..model.bodies import (CONTACT_UNKNOWNS, body_motion, body_pose, body_rotation, body_shape, box_moments,
                              inertial_wrench, kinetic_energy)
@@ -255,11 +255,11 @@ RESTART_STEPS = 2
 
 
 def _check_contact(robot, integrator):
-    """ScenarioError for contact that rod dynamics does not model: obstacles (and so free
+    """ModelError for contact that rod dynamics does not model: obstacles (and so free
     bodies, which rest on one) with the midpoint rule (its end state, ``2 z - x_n``, is
     extrapolated past the contact solved at the midpoint)."""
     if robot.obstacles and integrator.at_midpoint:
-        raise ScenarioError("dynamics.integrator: midpoint with obstacles: its end state is extrapolated past the "
+        raise ModelError("dynamics.integrator: midpoint with obstacles: its end state is extrapolated past the "
                             "contact solved at the step's middle; use bdf2")
 
 

@@ -13,7 +13,7 @@ import copy
 import numpy as np
 
 from ..errors import ScenarioError, flag
-from ..model.laws import thermal_kinds
+from ..catalogue import thermal_kinds
 from ..scenario.loader import validate
 from ..scenario.overrides import apply_overrides, without_set
 from ..solvers.thermal import Drive, Schedule, integrate, steady_state

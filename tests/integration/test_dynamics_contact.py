@@ -10,7 +10,7 @@ from numpy.testing import assert_allclose
 from conftest import SCENARIOS
 from random_robots import ramped_dynamics
 from tca_casadi import Simulation
-from tca_casadi.errors import ScenarioError
+from tca_casadi.errors import ModelError, ScenarioError
 from tca_casadi.time_simulation.motion import ENERGY_COLUMNS
 from tca_casadi.time_simulation.timeline import TimeSimulation
 
@@ -51,9 +51,9 @@ def test_without_the_table_it_comes_to_rest_hanging():
     ("dynamics.integrator=midpoint", "midpoint with obstacles"),
 ])
 def test_contact_the_dynamics_does_not_model_is_refused_in_one_line(setting, says):
-    with pytest.raises(ScenarioError, match=says) as caught:
+    with pytest.raises(ModelError, match=says) as caught:       # a valid scenario the model cannot take
         TimeSimulation(Simulation.from_file(TABLE, [setting, "duration=0.02"]), dt=0.01).run()
-    assert "\n" not in str(caught.value)
+    assert "\n" not in str(caught.value) and isinstance(caught.value, ScenarioError)
 
 
 @pytest.mark.parametrize("seed", [3, 7])

@@ -11,6 +11,7 @@ from conftest import SCENARIOS
 from tca_casadi import Simulation
 from tca_casadi.cli import main
 from tca_casadi.control import Plan
+from tca_casadi.errors import ModelError
 from tca_casadi.time_simulation.timeline import TimeSimulation
 
 HEATING = SCENARIOS / "bending_module_heating.yaml"
@@ -127,7 +128,7 @@ def test_voltage_bounds_are_in_volts_and_a_temperature_dependent_resistance_is_r
                                         r"'3 W' is not a voltage"):
         Plan(sim, target, horizon=24.0, nodes=4, bounds=["0", "3 W"])
     varying = Simulation.from_file(HEATING, VOLTAGE + ["tca_types.nylon.resistance_temperature_coefficient=0.001"])
-    with pytest.raises(Exception, match="resistance that changes with temperature"):
+    with pytest.raises(ModelError, match="resistance that changes with temperature"):
         Plan(varying, target, horizon=24.0, nodes=4)
 
 

@@ -18,43 +18,22 @@ inverse statics, the time simulation and calibration see a law only through this
   ``muscle_types.TYPE.NAME``), ``OPTIONS`` (non-numeric keys of the type), ``THERMAL``
   (heated by a drive in ``simulate``).
 
-A muscle is one file in this package defining ``MUSCLE = TheLawClass``: the scenario schema
+A muscle is one file in this package defining ``LAW = TheLawClass``: the scenario schema
 (``muscle_types:`` entries and the actuators of that kind), the parameter vector and the checks
 are made from its declarations (:mod:`tca_casadi.model.laws`).
 """
-from dataclasses import dataclass, replace
+from dataclasses import replace
 import math
-from typing import ClassVar, Optional
+from typing import ClassVar
+
+from ...catalogue.base import Declaration, range_text
 
 
-@dataclass(frozen=True)
-class LawParameter:
-    """One numeric constant of a law: its key (in ``muscle_types.TYPE`` and in the parameter
-    vector), unit kind (:data:`tca_casadi.units.KINDS`), default (None: may be left out, and is
-    then no parameter), whether it must be positive, and what it is."""
-    name: str
-    kind: str
-    default: Optional[float]
-    doc: str
-    positive: bool = True
-
-
-class ActuatorLaw:
+class ActuatorLaw(Declaration):
     """Base of every actuator law (see the module docstring). Subclasses are frozen dataclasses
-    whose fields are ``reference_length`` [m], the :attr:`PARAMETERS` and the :attr:`OPTIONS`."""
-    KIND: ClassVar[str] = ""
-    #: (input name, unit kind, default value): the actuator's scenario key and parameter
-    INPUT: ClassVar[tuple] = ("input", "dimensionless", 0.0)
-    PARAMETERS: ClassVar[tuple] = ()
-    #: non-numeric keys of the type: name -> (annotation, default)
-    OPTIONS: ClassVar[dict] = {}
-    #: keys of the type that only the thermal model (``simulate``) reads
-    THERMAL_KEYS: ClassVar[tuple] = ()
-    #: heated by a drive in ``simulate`` (its input is a temperature with a thermal model)
-    THERMAL: ClassVar[bool] = False
-    #: the key of the type whose value is the input at rest (None: ``INPUT``'s default)
-    REST_INPUT: ClassVar[Optional[str]] = None
-
+    whose fields are ``reference_length`` [m], the :attr:`PARAMETERS` and the :attr:`OPTIONS`;
+    their declarations (``KIND``, ``INPUT``, ``PARAMETERS``, ...) are their catalogue entry's
+    (:mod:`tca_casadi.catalogue`), which they inherit."""
     # ------------------------------------------------------------------ construction
     @classmethod
     def from_type(cls, config, reference_length, **context):
@@ -70,10 +49,6 @@ class ActuatorLaw:
         values = {p.name: param(prefix + p.name)[0] for p in self.PARAMETERS if getattr(self, p.name) is not None}
         return replace(self, reference_length=reference_length, **values)
 
-    @classmethod
-    def validate_type(cls, config):
-        """Raise ``ValueError`` (a one-line message) when the type's constants are inconsistent."""
-
     # ------------------------------------------------------------------ the law
     def residual(self, stroke, force, value):
         """``r(delta, F, u)``: zero on the law, positive when the path is too long for ``F``."""
@@ -88,9 +63,6 @@ class ActuatorLaw:
     def input_range(self):
         """``(low, high)`` of the input the law is valid for (SI, degC)."""
         return (-math.inf, math.inf)
-
-    #: the type's keys that set :attr:`input_range` (for messages)
-    RANGE_KEYS: ClassVar[tuple] = ()
 
     def input_problem(self, key, value, type_path="its type"):
         """Why the input ``value`` (of the parameter ``key``) is outside :attr:`input_range`, or None."""
@@ -140,9 +112,6 @@ class HeatedLaw(ActuatorLaw):
     """A law whose input is a temperature: heated in ``simulate``, valid from the type's
     ``min_temperature`` to ``max_temperature``, active above its ``reference_temperature`` (the
     subclass's fields)."""
-    INPUT = ("temperature", "temperature", 25.0)
-    THERMAL = True
-    RANGE_KEYS = ("min_temperature", "max_temperature")
     INVERSE_RANGE_TEXT = "reference_temperature to max_temperature"
 
     @property
@@ -172,12 +141,4 @@ def compression_warnings(key, force, tension_only, consequence):
 def range_problem(law, value, key=None, type_path="its type"):
     """Why ``value`` lies outside ``law.input_range`` (one line), or None."""
     low, high = law.input_range
-    if low <= value <= high:
-        return None
-    from ...units import UNIT_OF
-    kind = law.INPUT[1]
-    unit = "" if UNIT_OF.get(kind, "-") == "-" else " " + UNIT_OF[kind]
-    where = f"{key}: " if key else ""
-    keys = " and ".join(law.RANGE_KEYS) or "its range"
-    return (f"{where}{value:g}{unit} is outside the {law.KIND} law's range [{low:g}, {high:g}]{unit}; "
-            f"to go there, set {keys} of {type_path}")
+    return range_text(law, value, low, high, key, type_path)

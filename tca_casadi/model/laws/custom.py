@@ -17,11 +17,11 @@ found wherever the scenario travels as a mapping).
 """
 from dataclasses import dataclass, field
 import functools
-from typing import Optional
 import importlib
 import math
 import sys
 
+from ...catalogue.custom import Custom
 from .base import ActuatorLaw
 
 
@@ -30,7 +30,7 @@ class EntryPointError(ValueError):
 
 
 @dataclass(frozen=True)
-class CustomLaw(ActuatorLaw):
+class CustomLaw(Custom, ActuatorLaw):
     """A law from an entry point; ``function`` is the CasADi Function
     ``(stroke, force, input, l*, p_1..p_k) -> r`` built from it."""
     reference_length: float
@@ -42,36 +42,16 @@ class CustomLaw(ActuatorLaw):
     function: object = None
     folder: object = None
 
-    KIND = "custom"
-    INPUT = ("input", "dimensionless", 0.0)
-    OPTIONS = {"entry_point": (str, ...), "folder": (Optional[str], None), "parameters": (dict[str, float], {}),
-               "scale": ("dimensionless", 1.0), "min_input": ("dimensionless", -math.inf),
-               "max_input": ("dimensionless", math.inf)}
-
     @classmethod
     def from_type(cls, config, reference_length, **context):
         function = residual_function(config.entry_point, tuple(config.parameters), config.folder)
         return cls(reference_length, config.entry_point, dict(config.parameters), config.scale,
                    config.min_input, config.max_input, function, config.folder)
 
-    @classmethod
-    def parameter_entries(cls, config):
-        """``[(key, unit kind, value)]`` of the type's NLP parameters."""
-        return [(f"parameters.{key}", "dimensionless", value) for key, value in config.parameters.items()]
-
     def with_parameters(self, param, prefix, reference_length):
         values = {key: param(f"{prefix}parameters.{key}")[0] for key in self.parameters}
         return CustomLaw(reference_length, self.entry_point, values, self.scale, self.min_input,
                          self.max_input, self.function, self.folder)
-
-    @classmethod
-    def validate_type(cls, config):
-        if ":" not in config.entry_point:
-            raise ValueError(f"entry_point {config.entry_point!r} must read 'module:function'")
-        if not config.scale > 0:
-            raise ValueError(f"scale {config.scale:g} must be positive")
-        if not config.min_input < config.max_input:
-            raise ValueError("need min_input < max_input")
 
     def structural_problems(self, key):
         return []
@@ -101,7 +81,6 @@ class CustomLaw(ActuatorLaw):
             return None
         return stroke if abs(float(self.residual(stroke, 0.0, value))) < 1e-9 * self.scale else None
 
-    RANGE_KEYS = ("min_input", "max_input")
 
     @property
     def input_range(self):
@@ -135,38 +114,6 @@ def residual_function(entry_point, parameter_names, folder=None):
         raise EntryPointError(f"{entry_point}: {error}".splitlines()[0]) from None
 
 
-def describe_entry_point(entry_point, folder=None):
-    """What importing ``entry_point`` would run, found without running anything: ``"it would
-    import module 'muscle_laws' (/path/muscle_laws.py) and call linear_muscle"``. A top-level
-    module is located by ``importlib.util.find_spec`` (which executes nothing), else in
-    ``folder``."""
-    import importlib.util
-    from pathlib import Path
-    module_name, _, name = entry_point.partition(":")
-    top = module_name.split(".")[0]
-    where = None
-    try:
-        spec = importlib.util.find_spec(top) if top else None
-        where = spec.origin if spec is not None else None
-    except (ImportError, ValueError):
-        pass
-    if where is None and folder is not None:
-        for candidate in (Path(folder) / f"{top}.py", Path(folder) / top / "__init__.py"):
-            if candidate.is_file():
-                where = str(candidate)
-                break
-    found = f" ({_shown(where)})" if where else " (not found on the Python path or beside the scenario)"
-    return f"it would import module {module_name!r}{found} and call {name or '?'}"
-
-
-def _shown(path):
-    """A path relative to the working directory when it lies below it, else absolute."""
-    import os
-    here = os.getcwd()
-    relative = os.path.relpath(path, here)
-    return path if relative.startswith("..") or here == os.path.dirname(here) else relative
-
-
 def load_entry_point(entry_point, folder=None):
     """The function ``module:function`` names, imported from the Python path or ``folder``."""
     module_name, _, name = entry_point.partition(":")
@@ -191,4 +138,4 @@ def load_entry_point(entry_point, folder=None):
     return function
 
 
-MUSCLE = CustomLaw
+LAW = CustomLaw

@@ -21,15 +21,13 @@ pressures up to 600 kPa.
 from dataclasses import dataclass
 import math
 
+from ...catalogue.mckibben import NEUTRAL_ANGLE, McKibben
 from ..arith import cos, sin, sqrt
-from .base import ActuatorLaw, LawParameter
-
-#: the braid angle where the muscle stops pulling, ``atan(sqrt 2)`` = 54.7 deg
-NEUTRAL_ANGLE = math.atan(math.sqrt(2.0))
+from .base import ActuatorLaw
 
 
 @dataclass(frozen=True)
-class McKibbenLaw(ActuatorLaw):
+class McKibbenLaw(McKibben, ActuatorLaw):
     """One McKibben muscle (SI). Its type lives in ``muscle_types`` with ``kind: mckibben``."""
     reference_length: float
     radius: float = 2e-3
@@ -37,24 +35,6 @@ class McKibbenLaw(ActuatorLaw):
     correction: float = 1.0
     rest_length: object = None
     max_pressure: float = 600e3
-
-    KIND = "mckibben"
-    INPUT = ("pressure", "pressure", 0.0)
-    PARAMETERS = (
-        LawParameter("radius", "length", 2e-3, "initial radius of the braided sleeve r0 [m]"),
-        LawParameter("braid_angle", "angle", math.radians(20.0), "initial braid angle alpha0 [rad]"),
-        LawParameter("correction", "dimensionless", 1.0, "Tondu and Lopez's k (1: Chou and Hannaford)"),
-        LawParameter("rest_length", "length", None, "rest length l0 [m] (default: the path's l*)"),
-    )
-    OPTIONS = {"max_pressure": ("pressure", 600e3)}
-
-    @classmethod
-    def validate_type(cls, config):
-        if not config.braid_angle < NEUTRAL_ANGLE:
-            raise ValueError(f"braid_angle {math.degrees(config.braid_angle):.4g} deg must be below "
-                             "54.7 deg (the neutral angle, where the muscle stops pulling)")
-        if not config.correction >= 1.0:
-            raise ValueError(f"correction (Tondu-Lopez k) {config.correction:g} must be at least 1")
 
     def structural_problems(self, key):
         out = super().structural_problems(key)
@@ -115,7 +95,6 @@ class McKibbenLaw(ActuatorLaw):
         return float(self.length_at_rest * (1.0 - self.free_contraction) - self.reference_length)
 
     # ------------------------------------------------------------------ range and warnings
-    RANGE_KEYS = ("max_pressure",)
     INVERSE_RANGE_TEXT = "0 to max_pressure"
 
     @property
@@ -138,4 +117,4 @@ class McKibbenLaw(ActuatorLaw):
         return value > 0
 
 
-MUSCLE = McKibbenLaw
+LAW = McKibbenLaw

@@ -32,15 +32,15 @@ coefficients C_M = 8 MPa/K and C_A = 13.8 MPa/K are Liang and Rogers' (1990).
 """
 from dataclasses import dataclass
 import math
-from typing import Literal
 
 from ..arith import clip, cos
 from ..thermal import ThermalLaw, conductance, heat_capacity
-from .base import HeatedLaw, LawParameter, compression_warnings
+from ...catalogue.sma import Sma
+from .base import HeatedLaw, compression_warnings
 
 
 @dataclass(frozen=True)
-class SmaLaw(HeatedLaw):
+class SmaLaw(Sma, HeatedLaw):
     """One NiTi wire (SI, degC). Its type lives in ``muscle_types`` with ``kind: sma``."""
     reference_length: float
     wire_diameter: float = 0.15e-3
@@ -60,43 +60,6 @@ class SmaLaw(HeatedLaw):
     max_stress: float = 172e6
     resistivity: float = 80e-8
     resistance: object = None
-
-    KIND = "sma"
-    REST_INPUT = "reference_temperature"
-    PARAMETERS = (
-        LawParameter("wire_diameter", "length", 0.15e-3, "wire diameter d [m]"),
-        LawParameter("E_A", "pressure", 83e9, "austenite Young's modulus [Pa]"),
-        LawParameter("E_M", "pressure", 28e9, "martensite Young's modulus [Pa]"),
-        LawParameter("A_s", "temperature", 68.0, "austenite start temperature [degC]", positive=False),
-        LawParameter("A_f", "temperature", 78.0, "austenite finish temperature [degC]", positive=False),
-        LawParameter("M_s", "temperature", 52.0, "martensite start temperature [degC]", positive=False),
-        LawParameter("M_f", "temperature", 42.0, "martensite finish temperature [degC]", positive=False),
-        LawParameter("C_A", "pressure_per_kelvin", 13.8e6, "stress influence on A_s, A_f [Pa/K]"),
-        LawParameter("C_M", "pressure_per_kelvin", 8.0e6, "stress influence on M_s, M_f [Pa/K]"),
-        LawParameter("max_recoverable_strain", "dimensionless", 0.04, "eps_L, the transformation strain"),
-        LawParameter("reference_temperature", "temperature", 25.0,
-                     "where the wire is stress free in the reference shape [degC]", positive=False),
-    )
-    OPTIONS = {"branch": (Literal["heating", "cooling"], "heating"),
-               "min_temperature": ("temperature", 0.0), "max_temperature": ("temperature", 150.0),
-               "max_stress": ("pressure", 172e6),
-               "resistivity": ("resistivity", 80e-8), "resistance": ("resistance", None)}
-    #: the thermal model's keys (``simulate`` only): ``thermal`` (NiTi defaults), and the
-    #: electrical ``resistivity`` [ohm m] or the wire's ``resistance`` [ohm]
-    THERMAL_KEYS = ("thermal", "resistivity", "resistance")
-    THERMAL_DEFAULTS = {"density": 6450.0, "specific_heat": 837.0, "convection_coefficient": 25.0}
-
-    # ------------------------------------------------------------------ checks
-    @classmethod
-    def validate_type(cls, config):
-        for low, high in (("M_f", "M_s"), ("A_s", "A_f"), ("M_f", "A_s"), ("M_s", "A_f")):
-            if not getattr(config, low) < getattr(config, high):
-                raise ValueError(f"transformation temperatures out of order: need {low} < {high} "
-                                 f"(got {getattr(config, low):g} and {getattr(config, high):g} degC)")
-        if not config.max_recoverable_strain < 1:
-            raise ValueError(f"max_recoverable_strain {config.max_recoverable_strain:g} must be below 1")
-        if not config.min_temperature <= config.reference_temperature < config.max_temperature:
-            raise ValueError("need min_temperature <= reference_temperature < max_temperature")
 
     def structural_problems(self, key):
         out = super().structural_problems(key)
@@ -174,4 +137,4 @@ def thermal_law(config, law):
     return ThermalLaw(C, G, resistance, 0.0, law.reference_temperature)
 
 
-MUSCLE = SmaLaw
+LAW = SmaLaw

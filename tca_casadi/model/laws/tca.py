@@ -12,13 +12,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..arith import cos, is_casadi, sin
+from ...catalogue.tca import Tca
 from .base import HeatedLaw, compression_warnings
 
 
 @dataclass(frozen=True)
-class TcaLaw(HeatedLaw):
+class TcaLaw(Tca, HeatedLaw):
     """Constants of one TCA. Units: m, N, Pa, degC, rad/m. Its type lives in ``tca_types``
-    (its parameters: :data:`tca_casadi.model.parameters.TCA_KEYS`)."""
+    (its parameters: :data:`tca_casadi.catalogue.tca.TCA_KEYS`)."""
     coil_radius: float
     fiber_radius: float
     pitch_angle: float
@@ -30,8 +31,6 @@ class TcaLaw(HeatedLaw):
     min_temperature: float = -273.15   # degC: the range the law is validated for
     max_temperature: float = float("inf")
     fiber_length_given: bool = False   # the type gives fiber_length (else l* / sin(alpha))
-
-    KIND = "tca"
 
     @classmethod
     def from_type(cls, tca_type, reference_length, **context):
@@ -144,3 +143,13 @@ class TcaLaw(HeatedLaw):
         if not self.shear_coefficients[2] > 0:
             out.append(f"{key}: shear_modulus.a0 must be positive")
         return out
+
+
+def thermal_law(config, law):
+    """The lumped :class:`~tca_casadi.model.thermal.ThermalLaw` of a TCA of type ``config`` with
+    ``law`` (its fibre's length)."""
+    from ..thermal import thermal_law as tca_thermal_law
+    return tca_thermal_law(config, law.fiber_length)
+
+
+LAW = TcaLaw

@@ -134,7 +134,7 @@ class ThermalParameter:
 
 def thermal_parameter(scenario, path):
     """The :class:`ThermalParameter` of ``path``; ScenarioError naming what a time-series fit takes."""
-    from ...model.laws import thermal_kinds
+    from ...catalogue import thermal_kinds
     heated = {f"tca_types.{t}" for t in scenario.tca_types} | {
         f"muscle_types.{t}" for t, config in scenario.muscle_types.items() if config.kind in thermal_kinds()}
     parts = path.split(".")
