@@ -49,6 +49,13 @@ class Declaration:
         """Raise ``ValueError`` (a one-line message) when the type's constants are inconsistent."""
 
     @classmethod
+    def code_problem(cls, config):
+        """Why the code a type names cannot serve as its law (a custom law's entry point that
+        does not import, or does not build a scalar CasADi expression), one line, or None. It
+        runs that code: the scenario's checks call it only for scenarios that allow code."""
+        return None
+
+    @classmethod
     def parameter_entries(cls, config):
         """``[(key, unit kind, value)]`` of a type's NLP parameters (``TYPES_KEY.TYPE.key``;
         a value None is no parameter): its :attr:`PARAMETERS`."""

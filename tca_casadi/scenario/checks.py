@@ -139,14 +139,12 @@ def _check_module(scenario, index, module, raw, sources):
 
 
 def _check_muscle_types(scenario, raw, sources):
-    """A custom law's entry point imports and builds a scalar CasADi expression."""
-    from ..model.laws.custom import EntryPointError, residual_function
+    """The code a muscle type names can serve as its law (a custom law's entry point imports
+    and builds a scalar CasADi expression)."""
     for name, config in scenario.muscle_types.items():
-        if config.kind == "custom":
-            try:
-                residual_function(config.entry_point, tuple(config.parameters), config.folder)
-            except EntryPointError as error:
-                fail(raw, sources, ("muscle_types", name, "entry_point"), str(error))
+        problem = declarations()[config.kind].code_problem(config)
+        if problem:
+            fail(raw, sources, ("muscle_types", name, "entry_point"), problem)
 
 
 def _check_typed(scenario, actuator, declaration, path, raw, sources):

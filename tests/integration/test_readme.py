@@ -1,5 +1,7 @@
-"""The README is true to the letter: every fenced example runs verbatim from a copy of the
-repository, shown outputs match (``...`` stands for what varies between runs), error examples
+"""The README and the documentation's reference pages (``REFERENCE``: the command line, the
+Python API at work, the scenario format, tendons and contact, accuracy and speed; the tutorials
+run in ``test_docs.py``) are true to the letter: every fenced example runs verbatim from a copy
+of the repository, shown outputs match (``...`` stands for what varies between runs), error examples
 match exactly, the command-line synopsis matches ``--help``, and every dotted path used in an
 example names something in a shipped scenario.
 
@@ -15,20 +17,21 @@ from tca_casadi import cli
 from transcripts import fenced_blocks, fresh_copy, run_shell_block, run_transcript, skipped, transcripts
 
 ROOT = Path(__file__).resolve().parents[2]
+#: the pages this file runs: the README and the reference pages it moved to the documentation
+REFERENCE = ["README.md"] + [f"docs/{name}.md" for name in ("commands", "python", "scenario", "robots", "performance")]
 README = (ROOT / "README.md").read_text()
-
-def _all_blocks():
-    """``[(language, text)]`` of every fenced block, in order."""
-    return fenced_blocks(README)
-
+COMMANDS = (ROOT / "docs" / "commands.md").read_text()
 
 def _blocks(language):
-    return [text for kind, text in _all_blocks() if kind == language]
+    """``[(page, text)]`` of every fenced block in ``language`` of the pages, in order."""
+    return [(page, text) for page in REFERENCE for kind, text in fenced_blocks((ROOT / page).read_text())
+            if kind == language]
 
 
 def _transcripts():
-    """``(command, expected output lines)`` of every ``$ tca-casadi`` line in plain blocks."""
-    return transcripts(README)
+    """``(page, command, expected output lines)`` of every ``$ tca-casadi`` line in plain blocks."""
+    return [(page, command, expected) for page in REFERENCE
+            for command, expected in transcripts((ROOT / page).read_text())]
 
 
 @pytest.fixture(scope="module")
@@ -37,28 +40,33 @@ def workdir(tmp_path_factory):
     return fresh_copy(tmp_path_factory.mktemp("readme"), ROOT)
 
 
-@pytest.mark.parametrize("command, expected", [t for t in _transcripts() if not skipped(t[0])],
-                         ids=lambda value: value if isinstance(value, str) else "")
-def test_transcript(workdir, command, expected):
+STEPS = [t for t in _transcripts() if not skipped(t[1])]
+PYTHON = [(page, k, code) for k, (page, code) in enumerate(_blocks("python"))]
+
+
+@pytest.mark.parametrize("page, command, expected", STEPS, ids=[f"{p}: {c[:70]}" for p, c, _ in STEPS])
+def test_transcript(workdir, page, command, expected):
     run_transcript(workdir, command, expected)
 
 
-@pytest.mark.parametrize("block", [b for b in _blocks("bash")],
-                         ids=lambda b: b.strip().splitlines()[0][:60])
-def test_shell_block(workdir, block):
+@pytest.mark.parametrize("page, block", _blocks("bash"), ids=[f"{p}: {b.strip().splitlines()[0][:60]}" for p, b in _blocks("bash")])
+def test_shell_block(workdir, page, block):
     run_shell_block(workdir, block)
 
 
-@pytest.mark.parametrize("index", range(len(_blocks("python"))))
-def test_python_block(workdir, index, monkeypatch):
+@pytest.mark.parametrize("page, index, code", PYTHON, ids=[f"{p} python {k}" for p, k, _ in PYTHON])
+def test_python_block(workdir, page, index, code, monkeypatch):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
     monkeypatch.chdir(workdir)
-    code = _blocks("python")[index]
-    exec(compile(code, f"README.md python block {index}", "exec"), {"__name__": "readme"})
+    exec(compile(code, f"{page} python block {index}", "exec"), {"__name__": "readme"})
+    plt.close("all")
 
 
 def test_synopsis_matches_help():
     """Every option a subcommand takes appears in its synopsis line, and no other."""
-    block = next(b for b in _blocks("") if b.startswith("tca-casadi [-v] validate"))
+    block = next(b for kind, b in fenced_blocks(COMMANDS) if kind == "" and b.startswith("tca-casadi [-v] validate"))
     synopsis = {}
     for line in block.splitlines():
         words = line.split()

@@ -177,3 +177,19 @@ def test_cli_in_a_fresh_process_on_a_cluster_started_by_the_dask_command(scenari
     alone = pandas.read_parquet(tmp_path / "serial" / "study.parquet").sort_values("sample")
     assert on_dask["worker"].nunique() == 2
     assert_allclose(on_dask[TIP].to_numpy(float), alone[TIP].to_numpy(float), rtol=0, atol=1e-12)
+
+
+def test_a_cluster_without_workers_loses_the_samples_instead_of_hanging():
+    """A scheduler whose workers are all gone (never started here): after the wait the chunks
+    come back lost, with the reason, and nothing is left running."""
+    from tca_casadi.studies.batch.executors import run_dask
+    with _port_taken(), distributed.LocalCluster(n_workers=0, host="127.0.0.1",
+                                                 dashboard_address=":0", scheduler_port=0) as alone:
+        lost, done = [], []
+        start = time.monotonic()
+        run_dask([("chunk", 1), ("chunk", 2)], lambda chunk, rows: done.append(chunk), alone.scheduler_address,
+                 lambda chunk, reason: lost.append((chunk, reason)), no_worker_timeout=2)
+        waited = time.monotonic() - start
+    assert not done and sorted(chunk for chunk, _ in lost) == [("chunk", 1), ("chunk", 2)]
+    assert all("had no worker for 2 s" in reason and "dask worker tcp://127.0.0.1:" in reason for _, reason in lost)
+    assert 2 <= waited < 30

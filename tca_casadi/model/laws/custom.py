@@ -16,17 +16,10 @@ and relative to, the scenario file's folder; the loader writes it down absolute,
 found wherever the scenario travels as a mapping).
 """
 from dataclasses import dataclass, field
-import functools
-import importlib
 import math
-import sys
 
-from ...catalogue.custom import Custom
+from ...catalogue.custom import Custom, residual_function
 from .base import ActuatorLaw
-
-
-class EntryPointError(ValueError):
-    """The entry point cannot be imported or does not build a scalar CasADi expression."""
 
 
 @dataclass(frozen=True)
@@ -81,61 +74,9 @@ class CustomLaw(Custom, ActuatorLaw):
             return None
         return stroke if abs(float(self.residual(stroke, 0.0, value))) < 1e-9 * self.scale else None
 
-
     @property
     def input_range(self):
         return (self.min_input, self.max_input)
-
-
-
-@functools.lru_cache(maxsize=32)
-def residual_function(entry_point, parameter_names, folder=None):
-    """The CasADi Function ``(stroke, force, input, l*, *parameters) -> r`` of an entry point
-    (``EntryPointError`` with a one-line reason when it cannot be made)."""
-    import casadi as ca
-    function = load_entry_point(entry_point, folder)
-    symbols = [ca.SX.sym(name) for name in ("stroke", "force", "input", "reference_length")]
-    values = {name: ca.SX.sym(name) for name in parameter_names}
-    try:
-        out = function(*symbols, **values)
-    except Exception as error:           # the user's code: any failure is a bad entry point
-        raise EntryPointError(f"{entry_point} failed when called with CasADi symbols: "
-                              f"{type(error).__name__}: {error}") from None
-    if isinstance(out, (int, float)):
-        out = ca.SX(out)
-    if not isinstance(out, (ca.SX, ca.MX, ca.DM)):
-        raise EntryPointError(f"{entry_point} returned {type(out).__name__}, not a CasADi expression "
-                              "(build it with casadi operations on the arguments)")
-    if out.shape != (1, 1):
-        raise EntryPointError(f"{entry_point} returned shape {out.shape}, expected a scalar (1, 1)")
-    try:
-        return ca.Function("custom_law", symbols + list(values.values()), [ca.SX(out)])
-    except Exception as error:
-        raise EntryPointError(f"{entry_point}: {error}".splitlines()[0]) from None
-
-
-def load_entry_point(entry_point, folder=None):
-    """The function ``module:function`` names, imported from the Python path or ``folder``."""
-    module_name, _, name = entry_point.partition(":")
-    try:
-        module = importlib.import_module(module_name)
-    except ModuleNotFoundError as error:
-        if folder is None or error.name != module_name.split(".")[0]:
-            raise EntryPointError(f"cannot import {module_name!r}: {error}") from None
-        sys.path.insert(0, str(folder))
-        try:
-            module = importlib.import_module(module_name)
-        except ImportError as inner:
-            raise EntryPointError(f"cannot import {module_name!r} (looked on the Python path and in "
-                                  f"{folder}): {inner}") from None
-        finally:
-            sys.path.remove(str(folder))
-    except Exception as error:
-        raise EntryPointError(f"cannot import {module_name!r}: {type(error).__name__}: {error}") from None
-    function = getattr(module, name, None)
-    if not callable(function):
-        raise EntryPointError(f"module {module_name!r} has no function {name!r}")
-    return function
 
 
 LAW = CustomLaw

@@ -7,7 +7,8 @@ cluster. Each runner calls ``done(rows)`` with a chunk's rows as soon as it fini
   :data:`RETRIES` times), so the study completes.
 * **dask** (``--scheduler ADDRESS``, or ``$DASK_SCHEDULER_ADDRESS``): ``Client(address)``; the
   scheduler reruns the tasks of a worker that dies on the others. An address that does not
-  answer within :data:`CONNECT_TIMEOUT` is bad input.
+  answer within :data:`CONNECT_TIMEOUT` is bad input; a cluster with no worker left for
+  :data:`NO_WORKER_TIMEOUT` loses the unfinished samples instead of hanging.
 
 A chunk that cannot be finished even so comes back as one failure row per sample (status
 ``lost``, with the reason): no sample is ever missing from a study.
@@ -23,6 +24,11 @@ from .worker import solve_chunk
 RETRIES = 3
 #: seconds to wait for a Dask scheduler to answer
 CONNECT_TIMEOUT = 5
+#: seconds a Dask study waits while its cluster has no worker at all before the unfinished
+#: samples are lost (failure rows that say so) instead of waiting for ever
+NO_WORKER_TIMEOUT = 120
+#: seconds between looks at a Dask cluster's workers while no task finishes
+POLL_INTERVAL = 1.0
 
 
 def executor_of(workers=None, scheduler=None):
@@ -90,35 +96,53 @@ def connect(scheduler):
                             f"({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else 'no reply'})") from None
 
 
-def run_dask(chunks, done, scheduler, lost):
+def run_dask(chunks, done, scheduler, lost, no_worker_timeout=None):
     """The chunks as tasks on a Dask cluster. A task whose result cannot be had (its worker
     died after computing it, or the scheduler gave up on it: KilledWorker) is submitted again,
-    up to :data:`RETRIES` times; then ``lost(chunk, reason)``."""
-    from dask.distributed import as_completed
+    up to :data:`RETRIES` times; then ``lost(chunk, reason)``. A cluster left without a single
+    worker for ``no_worker_timeout`` seconds (default :data:`NO_WORKER_TIMEOUT`) loses the
+    unfinished chunks, with that reason, instead of waiting for ever."""
+    import time
+    timeout = NO_WORKER_TIMEOUT if no_worker_timeout is None else no_worker_timeout
     client, owned = connect(scheduler)
     try:
         futures = {client.submit(solve_chunk, chunk, pure=False): chunk for chunk in chunks}
-        attempts = {}
-        # the client's own loop: as_completed would otherwise look for a default client (none
-        # when this is the only client of the process)
-        finished = as_completed(list(futures), loop=client.loop)
-        for future in finished:
-            chunk = futures.pop(future)
-            try:
-                rows = future.result()
-            except Exception as exc:          # the cluster's failures, whatever their class
-                attempts[id(chunk)] = attempts.get(id(chunk), 0) + 1
-                if attempts[id(chunk)] <= RETRIES:
-                    again = client.submit(solve_chunk, chunk, pure=False)
-                    futures[again] = chunk
-                    finished.add(again)
-                else:
-                    lost(chunk, f"Dask: {type(exc).__name__}: {exc}")
+        attempts, alone_since, looked = {}, None, time.monotonic()
+        while futures:
+            finished = [future for future in futures if future.done()]
+            if not finished:
+                time.sleep(0.01)
+                if time.monotonic() - looked < POLL_INTERVAL:
+                    continue
+                looked = time.monotonic()
+                alone_since = None if client.nthreads() else (alone_since or time.monotonic())
+                if alone_since is not None and time.monotonic() - alone_since >= timeout:
+                    for future, chunk in futures.items():
+                        future.cancel()
+                        lost(chunk, f"Dask: the scheduler had no worker for {timeout:g} s (start workers "
+                                    f"with: dask worker {_address(client)})")
+                    return
                 continue
-            done(chunk, rows)
+            for future in finished:
+                chunk = futures.pop(future)
+                try:
+                    rows = future.result()
+                except Exception as exc:          # the cluster's failures, whatever their class
+                    attempts[id(chunk)] = attempts.get(id(chunk), 0) + 1
+                    if attempts[id(chunk)] <= RETRIES:
+                        futures[client.submit(solve_chunk, chunk, pure=False)] = chunk
+                    else:
+                        lost(chunk, f"Dask: {type(exc).__name__}: {exc}")
+                    continue
+                done(chunk, rows)
     finally:
         if owned:
             client.close()
+
+
+def _address(client):
+    """The scheduler's address, for messages."""
+    return getattr(client, "scheduler", None) and client.scheduler.address or "ADDRESS"
 
 
 def describe(kind, target):
