@@ -62,24 +62,34 @@ FRAME_ZOOM = 0.94
 
 def _save_movies(fig, draw, count, stem, fps):
     """Animate ``draw(frame)`` over ``count`` frames of ``fig`` into ``STEM.gif`` (and
-    ``STEM.mp4`` when ffmpeg is on the PATH), each written atomically; returns the paths."""
-    from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
+    ``STEM.mp4`` when ffmpeg is on the PATH), each written atomically; returns the paths.
+
+    Each frame is rendered once (matplotlib's ``FuncAnimation.save`` renders every frame twice,
+    and again for each writer): the GIF's frames are the canvas's pixels; an MP4 takes the
+    frames through matplotlib's ffmpeg writer."""
+    import contextlib
+    from PIL import Image
     fig.subplots_adjust(left=0.0, right=1.0, bottom=0.05, top=0.9)    # the drawing fills the frame
-
-    def framed(frame):
-        out = draw(frame)
-        for ax in fig.axes:
-            ax.set_box_aspect(ax.get_box_aspect(), zoom=FRAME_ZOOM)
-        return out
-
-    animation = FuncAnimation(fig, framed, frames=count, blit=False)
-    writers = [(stem.with_suffix(".gif"), PillowWriter)]
-    if shutil.which("ffmpeg"):
-        writers.append((stem.with_suffix(".mp4"), FFMpegWriter))
-    for path, writer in writers:
-        with atomic_path(path) as temporary:
-            animation.save(temporary, writer=writer(fps=fps))
-    return [path for path, _ in writers]
+    paths, images = [stem.with_suffix(".gif")], []
+    with contextlib.ExitStack() as stack:
+        movie = None
+        if shutil.which("ffmpeg"):
+            from matplotlib.animation import FFMpegWriter
+            paths.append(stem.with_suffix(".mp4"))
+            movie = FFMpegWriter(fps=fps)
+            stack.enter_context(movie.saving(fig, stack.enter_context(atomic_path(paths[1])), fig.dpi))
+        for frame in range(count):
+            draw(frame)
+            for ax in fig.axes:
+                ax.set_box_aspect(ax.get_box_aspect(), zoom=FRAME_ZOOM)
+            fig.canvas.draw()
+            images.append(Image.fromarray(np.asarray(fig.canvas.buffer_rgba())).convert("RGB"))
+            if movie is not None:
+                movie.grab_frame()
+        with atomic_path(paths[0]) as temporary:
+            images[0].save(temporary, format="GIF", save_all=True, append_images=images[1:],
+                           duration=int(1000 / fps), loop=0)
+    return paths
 
 
 #: speed-ups a time animation may use (the smallest that keeps it within its frame budget)

@@ -113,6 +113,8 @@ def draw_robot(solution, ax=None, sections_per_module=6, title=None, extra_point
     if own:
         fig = plt.figure(figsize=(8.4, 6.4), layout="constrained")
         ax = fig.add_subplot(projection="3d")
+    if limits is not None:
+        ax.set_autoscale_on(False)           # (the box is given: no rescaling after every line)
     norm = norm or temperature_norm(solution)
     colour_map = temperature_colours()
     everything = [_draw_module(ax, module, sections_per_module) for module in solution.modules]
