@@ -227,6 +227,14 @@ class SquareSystem:
         (k directional derivatives of the residual, about k residuals' cost: no full ``dg/dP``)
         and ``lu`` the factorised ``J_w`` (for the chord steps of a next solve nearby)."""
         directions = np.asarray(directions, float).reshape(len(P), -1)
+        rates = self.parameter_rates(w, P, directions)
+        _, J = self.evaluate(w, P)
+        lu = self.factorise(J)
+        return -lu.solve(rates), lu
+
+    def parameter_rates(self, w, P, directions):
+        """``J_P directions`` (n, k) at ``(w, P)`` (directions (nP, k)), by CasADi's forward
+        mode: k directional derivatives of the residual, about k residuals' cost."""
         k = directions.shape[1]
         if getattr(self, "_directional", None) is None or self._directional[0] != k:
             nlp = self.nlp
@@ -235,10 +243,23 @@ class SquareSystem:
             g = self._residual_function(w_sym, P_sym)
             self._directional = (k, BufferedFunction(self._fast(ca.Function("residual_by_P", [w_sym, P_sym, V],
                                                                             [ca.jtimes(g, P_sym, V)]))))
-        rates = self._directional[1](w, P, directions.ravel(order="F"))[0].reshape(-1, k, order="F")
-        _, J = self.evaluate(w, P)
-        lu = self.factorise(J)
-        return -lu.solve(np.ascontiguousarray(rates)), lu
+        rates = self._directional[1](w, P, directions.ravel(order="F"))[0]
+        return np.ascontiguousarray(rates.reshape(-1, k, order="F"))
+
+    def predicted(self, w, P_from, P_to, lu):
+        """A start for Newton at ``P_to`` from the root ``w`` at ``P_from``: the tangent
+        predictor ``w - J_w^-1 J_P (P_to - P_from)`` with ``lu`` (factors at or near ``w``; the
+        error falls from O(dP) to O(dP^2)), or ``w`` itself where that has the smaller residual
+        (factors too far off, a kink of a contact on the way)."""
+        step = (np.asarray(P_to, float) - np.asarray(P_from, float)).reshape(-1, 1)
+        if lu is None or not np.any(step):
+            return w
+        tangent = w - lu.solve(self.parameter_rates(w, P_from, step))[:, 0]
+        g_tangent = self._residual(tangent, P_to)[0]
+        if not np.all(np.isfinite(g_tangent)):
+            return w
+        size = float(np.max(np.abs(g_tangent)))
+        return tangent if size < float(np.max(np.abs(self._residual(w, P_to)[0]))) else w
 
     def parameter_jacobian(self, w, P):
         """``dg/dP`` (sparse, (n, nP)) at ``(w, P)``."""

@@ -117,9 +117,13 @@ class SolveStrategy:
         solver = self.solver()
         solution = None
         params = carried_history(self.robot, np.array(params, float), previous)
-        if previous is not None:
-            solution = (solver.solve_newton(params, solver.initial_guess(params, previous), lu=solver.square.last_lu)
-                        if solver.has_square_system else solver.solve(params, previous))
+        if previous is not None and solver.has_square_system:
+            lu, start = solver.square.last_lu, solver.initial_guess(params, previous)
+            if start is previous.iterate.w:          # the tangent from the previous point, on its factors
+                start = solver.square.predicted(start, previous.parameters, params, lu)
+            solution = solver.solve_newton(params, start, lu=lu)
+        elif previous is not None:
+            solution = solver.solve(params, previous)
         if solution is None or _needs_continuation(solution):
             cold = self.continue_from_rest(solver, params)
             solution = cold if solution is None else _better(solution, cold)
