@@ -10,7 +10,9 @@ the work the actuators do on the body, ``-sum_i int F_i dl_i`` (a TCA that short
 pulls does positive work), the work of the point loads ``int F . dp + M . dtheta`` (and the
 energy a point mass takes with it when it changes: an object let go), and the
 energy the rods' viscosity dissipated, ``int int xi_t . B xi_t ds dt`` (all in time by the
-trapezoidal rule, ``xi_t`` as ``(xi_{n+1} - xi_n) / h``), and with obstacles the impact loss,
+trapezoidal rule, ``xi_t`` as ``(xi_{n+1} - xi_n) / h``; on a step implicit Euler takes, the
+actuators' and loads' work by the forces at its end, the rule that step is solved by), and
+with obstacles the impact loss,
 the work the contact forces take: per step ``sum_k f_k,n+1 (g_k,n - g_k,n+1) >= 0`` (the
 implicit step's contact force acts at its end; ``docs/contact.md`` section 5a), and with
 friction the energy friction took, ``-sum f_t . (x_{n+1} - x_n)`` over the contacts (their
@@ -89,7 +91,12 @@ class EnergyAccount:
         """Account for the step from ``previous`` to ``state`` (StepStates, with their
         Solutions or StepOutputs). ``during``: the Solution the step was solved at (the midpoint rule's
         midpoint state), whose tensions and loads then do the work over the whole step (the
-        rule's own discrete energy identity); else the trapezoidal rule on the two ends."""
+        rule's own discrete energy identity); on implicit Euler's steps those at the step's end
+        (its identity, completed by ``euler_loss``); else the trapezoidal rule on the two ends."""
+        # implicit Euler's step (BDF2's first, an impact's) is solved at its end: the forces there
+        # do the work over the step, the rule whose energy identity ``euler_loss`` completes
+        euler = previous is not None and during is None and state.implicit_euler
+        during = solution if euler else during
         if previous is not None:
             robot = self.dynamics.robot
             if during is None:
@@ -114,7 +121,7 @@ class EnergyAccount:
                 self._work["integrator_loss"] += self.dynamics.euler_loss(previous, state)
         stored, rigid = self.stored(state, solution)
         if previous is not None:
-            self._work["load_work"] += self._field_work(previous, state, previous_solution, solution)
+            self._work["load_work"] += self._field_work(previous, state, previous_solution, solution, euler)
         if previous is not None and not np.array_equal(solution.parameters, previous_solution.parameters):
             # a point mass that changed (an object let go or taken) takes or brings its energy (at
             # this step's gravity: a change of gravity is the field's work above)
@@ -130,10 +137,12 @@ class EnergyAccount:
                    - self._work["load_work"])
         self.rows.append((*stored, *(self._work[name] for name in ENERGY_COLUMNS[3:-1]), balance))
 
-    def _field_work(self, previous, state, before, after):
+    def _field_work(self, previous, state, before, after, euler=False):
         """The work [J] of a change of gravity over a step (a lift's acceleration is one, in its
         frame): ``-sum m (g_{n+1} - g_n) . (x_n + x_{n+1}) / 2`` over every mass, as the mean over
-        the step's two ends of the gravitational energy's change with ``g`` alone."""
+        the step's two ends of the gravitational energy's change with ``g`` alone; ``euler``: an
+        implicit Euler step, whose gravity ``g_{n+1}`` acts over the whole step, ``-sum m (g_{n+1}
+        - g_n) . x_n`` (``m g_{n+1} . (x_{n+1} - x_n)`` is the store's change less that)."""
         robot = self.dynamics.robot
         old = np.asarray(before.parameters, float)
         index = robot.layout["gravity"]
@@ -141,8 +150,9 @@ class EnergyAccount:
             return 0.0
         turned = old.copy()
         turned[index] = np.asarray(after.parameters, float)[index]
-        return 0.5 * sum(self._gravitational(x, view, turned) - self._gravitational(x, view, old)
-                         for x, view in ((previous, before), (state, after)))
+        ends = ((previous, before),) if euler else ((previous, before), (state, after))
+        return sum(self._gravitational(x, view, turned) - self._gravitational(x, view, old)
+                   for x, view in ends) / len(ends)
 
     def _gravitational(self, state, view, params):
         """The gravitational energy [J] of the rods, rigid point masses and free bodies at
