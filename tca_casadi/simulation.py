@@ -135,10 +135,11 @@ class Simulation:
         self.last = solution
         return solution
 
-    def solve_at(self, params, method=None):
+    def solve_at(self, params, method=None, estimate=True):
         """Solve at the parameter vector ``params`` from the reference state (cold, with
-        continuation), leaving this simulation's own parameters and last solution unchanged."""
-        return self.strategy.solve(params, None, method, refine=False)[0]
+        continuation), leaving this simulation's own parameters and last solution unchanged;
+        ``estimate`` False: without the error estimate (a start point)."""
+        return self.strategy.solve(params, None, method, refine=False, estimate=estimate)[0]
 
     def continue_from_rest(self, solver=None, params=None):
         """Continuation from the unloaded reference state to ``params`` (default the current

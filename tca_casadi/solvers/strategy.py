@@ -69,11 +69,13 @@ class SolveStrategy:
             self.robot, self.scenario.solver, self.robot.structure_key(self.scenario), meshes, degree)
 
     # ------------------------------------------------------------------ one point
-    def solve(self, params, initial=None, method=None, continuation=None, refine=True):
+    def solve(self, params, initial=None, method=None, continuation=None, refine=True, estimate=True):
         """The equilibrium at the parameter vector ``params`` (see :meth:`Simulation.solve
         <tca_casadi.simulation.Simulation.solve>`): ``initial`` a previous Solution to start
-        from, or None (a cold start). Returns ``(solution, params)``: ``params`` with the
-        contact objects' history carried from the path taken (grips anchored where they ended)."""
+        from, or None (a cold start); ``estimate`` False: no error estimate of a cold start (a
+        start point for something else, whose own answer is estimated or verified). Returns
+        ``(solution, params)``: ``params`` with the contact objects' history carried from the
+        path taken (grips anchored where they ended)."""
         solver = self.solver(method)
         continuation = continuation or self.scenario.solver.continuation
         params = carried_history(self.robot, np.array(params, float), initial)   # contact objects' grips
@@ -94,7 +96,7 @@ class SolveStrategy:
             # friction: the state reached carries its path's history (each contact anchored where
             # it ended up), which a refined solve, and the next solve, start from
             params = carried_history(self.robot, params, solution)
-        if initial is None and solution.converged and solver.estimates_error:
+        if initial is None and solution.converged and solver.estimates_error and estimate:
             solver, solution, _ = accuracy.control(solver, solution, params, refine)
             self.use_solver(solver, method)
         if solution.converged and (solution.penetration > self.robot.contact_tolerance or self.robot.added_contacts) \

@@ -80,3 +80,25 @@ def test_temperature_differences_take_kelvin_and_degc_steps_alike():
     assert temperature_difference(2.0) == 2.0
     with pytest.raises(ValueError, match="'3 mm' is not a temperature difference"):
         temperature_difference("3 mm")
+
+
+@pytest.mark.parametrize("usable", [True, False])
+def test_the_unit_registry_is_cached_on_disk_where_it_can_be(tmp_path, usable):
+    """A fresh process keeps pint's parsed definitions in its cache folder (XDG_CACHE_HOME/pint);
+    where that cannot be made (the cache home is a file), units work all the same, uncached."""
+    import os
+    import subprocess
+    import sys
+    home = tmp_path / ("cache" if usable else "file")
+    if not usable:
+        home.write_text("")
+    code = "from tca_casadi.units import to_si, ureg; print(to_si('100 degC', 'temperature'), ureg.cache_folder)"
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                         env={**os.environ, "XDG_CACHE_HOME": str(home)})
+    assert run.returncode == 0, run.stderr
+    value, folder = run.stdout.split()
+    assert float(value) == 100.0
+    if usable:
+        assert folder == str(home / "pint") and any((home / "pint").iterdir())
+    else:
+        assert folder == "None"

@@ -264,12 +264,13 @@ class InverseStatics:
         return results
 
     def _forward(self, tau):
-        """The forward Solution at temperatures ``tau`` (continuation from the reference state),
-        cached per parameter vector: starts are shared by all queries."""
+        """The forward Solution at temperatures ``tau`` (continuation from the reference state,
+        no error estimate: a start, and where the verification starts from), cached per parameter
+        vector: starts are shared by all queries."""
         params = self.params_at(tau)
         key = params.tobytes()
         if key not in self._forward_cache:
-            self._forward_cache[key] = self.sim.solve_at(params, method="collocation")
+            self._forward_cache[key] = self.sim.solve_at(params, method="collocation", estimate=False)
         return self._forward_cache[key]
 
     def _forward_w(self, tau):
