@@ -61,6 +61,42 @@ def test_sequence_command_writes_table_pngs_and_animation(tmp_path, capsys):
     assert "all converged" in capsys.readouterr().out
 
 
+def test_with_ffmpeg_the_animation_is_an_mp4_too(sequence, tmp_path, monkeypatch):
+    """With an ``ffmpeg`` on the PATH (imageio-ffmpeg's, a test dependency), ``save_animation``
+    writes ``sequence.mp4`` beside the GIF from the same rendering: one video frame per
+    animation frame (every transition frame and each step held 3 frames), at 8 frames per
+    second, its middle frame the GIF's within the video's compression (mean difference below 3
+    of 255)."""
+    import re
+    import subprocess
+    from tca_casadi.plotting.animation import save_animation
+    imageio_ffmpeg = pytest.importorskip("imageio_ffmpeg")
+    folder = tmp_path / "bin"
+    folder.mkdir()
+    (folder / "ffmpeg").symlink_to(imageio_ffmpeg.get_ffmpeg_exe())
+    monkeypatch.setenv("PATH", f"{folder}:{__import__('os').environ['PATH']}")
+    paths = save_animation(sequence, tmp_path)
+    assert [p.name for p in paths] == ["sequence.gif", "sequence.mp4"]
+    count = sum(len(transition) + 3 for transition in sequence.transitions)
+    middle = tmp_path / "middle.png"
+    run = subprocess.run([str(folder / "ffmpeg"), "-i", str(paths[1]), "-vf", f"select=eq(n\\,{count // 2})",
+                          "-frames:v", "1", str(middle)], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stderr
+    assert re.search(r"(\d+(?:\.\d+)?) fps", run.stderr).group(1) == "8"
+    decoded = subprocess.run([str(folder / "ffmpeg"), "-i", str(paths[1]), "-f", "null", "-"], capture_output=True,
+                             text=True, timeout=60).stderr
+    assert int(re.findall(r"frame=\s*(\d+)", decoded)[-1]) == count
+    with Image.open(paths[0]) as gif:                         # the GIF's frame at the same time
+        shown, elapsed = None, 0
+        for index in range(gif.n_frames):
+            gif.seek(index)
+            if elapsed <= (count // 2) * 125 < elapsed + gif.info["duration"]:
+                shown = np.asarray(gif.convert("RGB"), float)
+            elapsed += gif.info["duration"]
+    with Image.open(middle) as frame:
+        assert np.mean(np.abs(np.asarray(frame.convert("RGB"), float) - shown)) < 3.0
+
+
 def test_missing_sequence_and_bad_paths_are_named(tmp_path, capsys):
     assert main(["sequence", str(SCENARIOS / "twisting_module.yaml"), "-o", str(tmp_path)]) == 2
     assert "no sequence" in capsys.readouterr().err
