@@ -12,7 +12,6 @@ import pint
 from .text import clip, shorten, unit_text  # noqa: F401  (messages cut long values alike)
 
 
-
 def _registry():
     """pint's unit registry, its parsed definitions cached on disk by pint (``~/.cache/pint``:
     30 ms instead of 190 ms a process); without the cache where it cannot be used."""

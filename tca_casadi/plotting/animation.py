@@ -1,6 +1,7 @@
 """Frames and animations: a sequence's steps (one PNG per step, and a GIF, MP4 too where
 ffmpeg exists, that plays the transitions between steps) and a ``simulate`` run in time (a GIF
 and MP4 with a clock, at real time or a stated speed-up)."""
+import contextlib
 import shutil
 from pathlib import Path
 
@@ -67,7 +68,6 @@ def _save_movies(fig, draw, count, stem, fps):
     Each frame is rendered once (matplotlib's ``FuncAnimation.save`` renders every frame twice,
     and again for each writer): the GIF's frames are the canvas's pixels; an MP4 takes the
     frames through matplotlib's ffmpeg writer."""
-    import contextlib
     from PIL import Image
     fig.subplots_adjust(left=0.0, right=1.0, bottom=0.05, top=0.9)    # the drawing fills the frame
     paths, images = [stem.with_suffix(".gif")], []
