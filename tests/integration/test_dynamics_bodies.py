@@ -188,3 +188,18 @@ def test_a_cube_pinched_below_its_centre_topples_at_the_inverted_pendulums_rate(
     assert arm[2] > 0                                                                  # above the line
     inertia = m * (0.009 ** 2 + 0.009 ** 2) / 12 + m * d * d
     assert_allclose(rate, np.sqrt(m * 9.81 * d / inertia), rtol=0.02)
+    # the same rate from the linearised time-continuous equations (solvers.stability), at the
+    # equilibrium a sequence reaches with the table lowered: the one real root, to 1 % of the run's
+    from tca_casadi.solvers.dynamics import RodDynamics
+    from tca_casadi.solvers.stability import growth_rates
+    from tca_casadi.studies.sequence import run_sequence
+    from tca_casadi.time_simulation.motion import damping_of
+    steps = "sequence=[{name: rest, set: {}}, {name: lift, set: {obstacles.table.position: [0, 0, -50 mm]}}]"
+    sim = Simulation.from_file(LIFT, [steps])
+    hanging = run_sequence(sim).solutions[-1]
+    assert hanging.converged and not hanging.bodies[0].resting
+    found = growth_rates(RodDynamics(sim.robot, sim.solver("collocation"), "bdf2",
+                                     damping_of(sim.scenario.dynamics.damping, sim.scenario)), hanging)
+    assert found.residual < 1e-9 and found.rates.size == 1
+    assert_allclose(found.rates[0], rate, rtol=0.01)
+    assert_allclose(found.rates[0], np.sqrt(m * 9.81 * d / inertia), rtol=0.02)
