@@ -105,6 +105,13 @@ class ContactResult:
     sliding: bool = False
     slip: float = 0.0
     slid: float = 0.0
+    #: (3,) [m] the rod's material point the friction force acts at (anchored where the contact
+    #: touched at the solve's start: :mod:`~tca_casadi.model.history`); None: ``position``
+    held_at: Optional[np.ndarray] = None
+    #: (3,) [m] the point of the body or obstacle the friction history anchors it to (where
+    #: ``held_at`` was at the solve's start, carried with the body); None: no friction history.
+    #: ``held_at - anchored_at`` is its slip over the solve (a time step)
+    anchored_at: Optional[np.ndarray] = None
 
     @property
     def force(self):

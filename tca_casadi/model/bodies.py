@@ -24,7 +24,10 @@ complementarity's corner, and one for ``lambda``::
     c = sticks * step(f_n / f_s - g / g_s),   P = I - n n^T
 
 ``u`` is how far the contact point moved since the solution the solve starts from: for a grip
-``x - r - R X``, ``X`` the body-frame point its rod's outline point was at there; for a corner
+``x - r - R X``, ``X`` the body-frame point its rod's outline point was at there and ``x = p +
+R rho`` the rod's material point that touched there (``rho`` in its section frame: a material
+point, so that sticking pins the rod, where the outline point nearest the body runs along a
+flat face as the section tilts); for a corner
 ``y - A``, ``A`` the point of the plane it pressed there. ``X``, ``A`` (anchors) and ``sticks``
 (0 or 1: the contact was closed there) are parameters copied from that solution and carried
 again after every continuation step (the history a static solve needs). So ``u = -(kappa +
@@ -181,8 +184,9 @@ def friction_equations(moved, n, sticks, normal_force, tangential, slip, gap, fo
 
 def grip_friction(point, n, r, R, anchor, sticks, normal_force, tangential, slip, gap, force_scale, gap_scale,
                   friction=0.0, sliding=False):
-    """The four friction equations of one grip: ``point`` the rod's outline point, ``(r, R)``
-    the body's pose, ``anchor`` (3,) the body-frame point it was at."""
+    """The four friction equations of one grip: ``point`` the rod's material point that
+    friction holds (:func:`~.contact.held_point`), ``(r, R)`` the body's pose, ``anchor`` (3,)
+    the body-frame point it was at."""
     return friction_equations(point - r - R @ anchor, n, sticks, normal_force, tangential, slip, gap, force_scale,
                               gap_scale, friction, sliding)
 

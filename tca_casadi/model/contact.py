@@ -110,17 +110,28 @@ def contact_geometry(shape, module, state):
     return g, n, contact_point(shape, outline, p, R)
 
 
-def contact_wrench(module, state, shape, force, tangential=None):
+def held_point(state, offset):
+    """The rod's material point that friction holds (3,) [m]: ``p + R offset`` at a deviation
+    state, ``offset`` (3,) its place in the section frame (the history's ``offset``, recorded
+    where the contact touched: :mod:`.history`)."""
+    p, R = contact_frame(state)
+    return p + R @ offset
+
+
+def contact_wrench(module, state, shape, force, tangential=None, offset=None):
     """Body-frame wrench ``[moment; force]`` of a normal force ``force`` [N] along the
-    obstacle's normal (plus a ``tangential`` force (3,) [N], friction) at the outline's nearest
-    point, about the centerline point of ``state`` (the same jump a point load makes,
-    :func:`tca_casadi.model.boundary.point_wrenches`)."""
+    obstacle's normal at the outline's nearest point, plus a ``tangential`` force (3,) [N]
+    (friction) at the material point ``offset`` (:func:`held_point`), about the centerline point
+    of ``state`` (the same jump a point load makes, :func:`tca_casadi.model.boundary.point_wrenches`)."""
     import casadi as ca
     p, _ = contact_frame(state)
     _, n, point = contact_geometry(shape, module, state)
-    global_force = force * n if tangential is None else force * n + tangential
+    global_force, moment = force * n, cross(point - p, force * n)
+    if tangential is not None:
+        global_force = global_force + tangential
+        moment = moment + cross(held_point(state, offset) - p, tangential)
     zero = ca.DM.zeros(3)
-    return POINT_WRENCH(state[3:7], global_force, cross(point - p, global_force), zero, zero)
+    return POINT_WRENCH(state[3:7], global_force, moment, zero, zero)
 
 
 _GAP_FUNCTIONS = {}

@@ -20,7 +20,7 @@ import numpy as np
 
 from .bodies import (CONTACT_UNKNOWNS, CORNER_SIGNS, body_equilibrium, body_pose, body_scales, body_shape,
                      corner_points, friction_equations, grip_friction, support_equations)
-from .contact import contact_geometry, normal_contact, outline_size
+from .contact import contact_geometry, held_point, normal_contact, outline_size
 from .history import support_parameter
 
 
@@ -38,13 +38,17 @@ class ContactViews:
     supports: dict = field(default_factory=dict)
 
     def contact_of(self, robot, param):
-        """``contact -> (shape, f_n [N], f_t (3,) [N] or None)`` for :mod:`.boundary`: the
-        obstacle placed at the parameters, or (a grip) the body at its pose."""
+        """``contact -> (shape, f_n [N], f_t (3,) [N] or None, offset (3,) or None)`` for
+        :mod:`.boundary`: the obstacle placed at the parameters, or (a grip) the body at its
+        pose; ``offset`` where on the rod's section friction acts (:func:`~.contact.held_point`)."""
         def of(contact):
             if contact.body is not None:
-                return (self.body_shapes[contact.body],) + tuple(self.grips[contact.index][0:2])
-            tangential = self.frictions[contact.index][0] if contact.index in self.frictions else None
-            return robot.obstacle_of(contact.obstacle, param), self.contact_forces[contact.index], tangential
+                return ((self.body_shapes[contact.body],) + tuple(self.grips[contact.index][0:2])
+                        + (param(robot.grip_parameter(contact, "offset")),))
+            if contact.index not in self.frictions:
+                return robot.obstacle_of(contact.obstacle, param), self.contact_forces[contact.index], None, None
+            return (robot.obstacle_of(contact.obstacle, param), self.contact_forces[contact.index],
+                    self.frictions[contact.index][0], param(robot.contact_parameter(contact, "offset")))
         return of
 
 
@@ -122,12 +126,14 @@ def contact_conditions(robot, views, state_at, param, inertia=None):
     for c in robot.contacts:
         module = robot.modules[c.module]
         shape = robot.obstacle_of(c.obstacle, param)
-        g, n, point = contact_geometry(shape, module, state_at(c.module, c.s))
+        state = state_at(c.module, c.s)
+        g, n, _ = contact_geometry(shape, module, state)
         f, fs, gs = views.contact_forces[c.index], module.force_scale, outline_size(module)
         out.append(normal_contact(f, g, fs, gs))
         if c.index in views.frictions:
             tangential, slip = views.frictions[c.index]
-            moved = point - shape.position - param(robot.contact_parameter(c, "anchor"))
+            held = held_point(state, param(robot.contact_parameter(c, "offset")))
+            moved = held - shape.position - param(robot.contact_parameter(c, "anchor"))
             out.append(friction_equations(moved, n, param(robot.contact_parameter(c, "sticks")), f, tangential, slip,
                                           g, fs, gs, robot.obstacles[c.obstacle].friction,
                                           robot.friction_law == "coulomb"))
@@ -143,14 +149,16 @@ def body_conditions(robot, views, state_at, param, inertia=None):
     poses = [(shape.position, shape.rotation) for shape in views.body_shapes]
     for c in robot.grips:
         module, body = robot.modules[c.module], robot.bodies[c.body]
-        g, n, point = contact_geometry(views.body_shapes[c.body], module, state_at(c.module, c.s))
+        state = state_at(c.module, c.s)
+        g, n, point = contact_geometry(views.body_shapes[c.body], module, state)
+        held = held_point(state, param(robot.grip_parameter(c, "offset")))
         fs, gs = module.force_scale, outline_size(module)
         f, t, slip = views.grips[c.index]
         out.append(normal_contact(f, g, fs, gs))
-        out.append(grip_friction(point, n, *poses[c.body], param(robot.grip_parameter(c, "anchor")),
+        out.append(grip_friction(held, n, *poses[c.body], param(robot.grip_parameter(c, "anchor")),
                                  param(robot.grip_parameter(c, "sticks")), f, t, slip, g, fs, gs,
                                  body.friction, body.sliding))
-        on_body[c.body].append((point, f * n + t))
+        on_body[c.body] += [(point, f * n), (held, t)]
     for body in robot.bodies:
         fo, lo = body_scales(body)
         r, R = poses[body.index]

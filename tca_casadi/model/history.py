@@ -6,13 +6,15 @@ the solution a solve starts from (:func:`carried_history`) and carried again aft
 accepted continuation step:
 
 - per grip (a candidate of a ``held_by`` module against a contact object)
-  ``objects.NAME.grip.MODULE.K.anchor`` (3: the body-frame point its rod point touched) and
-  ``.sticks`` (1 when it was closed);
+  ``objects.NAME.grip.MODULE.K.anchor`` (3: the body-frame point its rod point touched),
+  ``.offset`` (3: that rod point in the rod's section frame, ``R^T (x - p)``: friction holds the
+  rod's material point ``p + R offset``, not the outline point nearest the body, which runs
+  along a flat face as the section tilts) and ``.sticks`` (1 when it was closed);
 - per corner ``J`` of a supported contact object ``objects.NAME.support.J.anchor`` (3: where on
   the plane it pressed, from its placed position) and ``.sticks``;
 - per candidate ``K`` of each module against each obstacle with ``friction > 0``
   ``obstacles.NAME.contact.MODULE.K.anchor`` (3: where on the obstacle the rod's outline point
-  touched, from the obstacle's position) and ``.sticks``.
+  touched, from the obstacle's position), ``.offset`` (as a grip's) and ``.sticks``.
 
 Written without any numerical library beyond numpy (``validate`` declares these parameters).
 """
@@ -20,10 +22,12 @@ import numpy as np
 
 #: the first element of a history parameter's ``source`` (it is no scenario key)
 HISTORY = "history"
+#: a rod contact's history (a grip's, or a candidate's against an obstacle with friction): key, size
+ROD_HISTORY = (("anchor", 3), ("offset", 3), ("sticks", 1))
 
 
 def grip_parameter(body, module, number, key):
-    """The name of a grip's history parameter ``key`` (``anchor`` or ``sticks``): ``body``,
+    """The name of a grip's history parameter ``key`` (``anchor``, ``offset`` or ``sticks``): ``body``,
     ``module`` names, ``number`` its place among the module's candidates."""
     return f"objects.{body}.grip.{module}.{number}.{key}"
 
@@ -35,7 +39,7 @@ def support_parameter(body, corner, key):
 
 
 def contact_parameter(obstacle, module, number, key):
-    """The name of a rod contact's history parameter ``key`` (``anchor`` or ``sticks``) against
+    """The name of a rod contact's history parameter ``key`` (``anchor``, ``offset`` or ``sticks``) against
     an obstacle with friction: ``obstacle``, ``module`` names, ``number`` the candidate's place
     among the module's candidates."""
     return f"obstacles.{obstacle}.contact.{module}.{number}.{key}"
@@ -61,7 +65,7 @@ def history_names(scenario):
     out = []
     for b, m, K, _ in grip_points(scenario):
         out += [(grip_parameter(bodies[b][1].name, scenario.modules[m].name, K, key), size)
-                for key, size in (("anchor", 3), ("sticks", 1))]
+                for key, size in ROD_HISTORY]
     for _, item in bodies:
         if item.support is not None:
             out += [(support_parameter(item.name, j, key), size) for j in range(len(CORNER_SIGNS))
@@ -71,7 +75,7 @@ def history_names(scenario):
         for module, points in zip(scenario.modules, module_candidates(scenario)):
             for K in range(len(points)):
                 out += [(contact_parameter(name, module.name, K, key), size) for name in frictional
-                        for key, size in (("anchor", 3), ("sticks", 1))]
+                        for key, size in ROD_HISTORY]
     return out
 
 
@@ -117,8 +121,40 @@ def _carry_grips(robot, params, solution):
         closed = None if found is None else _closed(found.grips, module, c.s, body.name)
         params[robot.layout[robot.grip_parameter(c, "sticks")]] = 0.0 if closed is None else 1.0
         if closed is not None:
-            params[robot.layout[robot.grip_parameter(c, "anchor")]] = anchor_of(found.position, found.rotation,
-                                                                                closed.position)
+            point = _held(solution, robot.grip_parameter(c, "sticks"), closed, module)
+            params[robot.layout[robot.grip_parameter(c, "anchor")]] = anchor_of(found.position, found.rotation, point)
+            params[robot.layout[robot.grip_parameter(c, "offset")]] = _section_offset(solution, c, point)
+
+
+#: a held material point still touches while it lies within this fraction of its section's size
+#: of the surface (normal distance to the point in contact)
+TOUCHING = 1e-3
+
+
+def _held(solution, sticks, closed, module):
+    """Where a closed contact is anchored for the next solve: the rod's material point friction
+    held in ``solution`` while that still touches (a contact that was anchored there, ``sticks``
+    its history name, and whose held point lies within :data:`TOUCHING` of the surface), else
+    the point in contact now. A sticking contact thus keeps its material point, as a corner keeps
+    its anchor (re-anchoring at the outline point nearest the body, which runs along a flat face
+    as the section tilts, would move where friction acts at every solve); a rolling one (the
+    held point lifts off) moves on to the new point of contact."""
+    from .contact import outline_size
+    point = np.asarray(closed.position, float)
+    if closed.held_at is None or solution.parameter_names is None or sticks not in solution.parameter_names:
+        return point
+    if np.asarray(solution.parameters[solution.parameter_names[sticks]]).ravel()[0] < 0.5:
+        return point
+    held = np.asarray(closed.held_at, float)
+    return held if abs(float(np.dot(closed.normal, held - point))) <= TOUCHING * outline_size(module) else point
+
+
+def _section_offset(solution, contact, point):
+    """``point`` (3,) [m] in the section frame of ``contact``'s rod at its arc length: ``R^T
+    (point - p)``, the material point of the rod that touches there (candidates sit on nodes)."""
+    module = solution.modules[contact.module]
+    j = int(np.argmin(np.abs(module.s - contact.s)))
+    return module.R[:, :, j].T @ (np.asarray(point, float) - module.p[:, j])
 
 
 def _carry_supports(robot, params, solution):
@@ -152,4 +188,6 @@ def _carry_contacts(robot, params, solution):
         params[robot.layout[robot.contact_parameter(c, "sticks")]] = 0.0 if closed is None else 1.0
         if closed is not None:
             origin = np.asarray(placed(f"obstacles.{shape.name}.position"), float).ravel()
-            params[robot.layout[robot.contact_parameter(c, "anchor")]] = np.asarray(closed.position, float) - origin
+            point = _held(solution, robot.contact_parameter(c, "sticks"), closed, module)
+            params[robot.layout[robot.contact_parameter(c, "anchor")]] = point - origin
+            params[robot.layout[robot.contact_parameter(c, "offset")]] = _section_offset(solution, c, point)

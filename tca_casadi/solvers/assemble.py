@@ -7,7 +7,7 @@ import numpy as np
 from ..errors import PhysicsWarning
 from ..model.balance import global_balance, load_markers
 from ..model.compatibility import slack_length
-from ..model.contact import CLOSED, contact_geometry, gaps, outline_of, outline_size
+from ..model.contact import CLOSED, contact_geometry, gaps, held_point, outline_of, outline_size
 from ..model.friction import cone_margin
 from ..model.rotations import rotations_of
 from ..text import unit_text
@@ -99,7 +99,7 @@ def physics_warnings(robot, actuators, params):
     return out
 
 
-def contact_results(robot, modules, module_data, forces, clearance=None, frictions=None):
+def contact_results(robot, params, module_data, forces, clearance=None, frictions=None):
     """``(contacts, loads, clearance, warnings, pattern)`` of a solution with contacts: the
     :class:`ContactResult` of every closed contact, ``{m: (points, forces)}`` (3, k) of all of
     them for the global balance, per obstacle the body's nearest approach ``{name: {gap,
@@ -109,20 +109,28 @@ def contact_results(robot, modules, module_data, forces, clearance=None, frictio
     than it has or slides, and, per candidate, which side of its complementarities' corners it
     is on (``f / f_s > g / g_s``: the equation's row is the gap's; continuation's corners).
     ``frictions``: ``{contact index: (f_t (3), slip multiplier)}`` [SI] of the contacts against
-    obstacles with friction."""
+    obstacles with friction, whose force acts at the rod's material point the history's
+    ``offset`` names (:func:`~tca_casadi.model.contact.held_point`) at ``params``."""
     closed, loads, found, warnings, pattern = [], {}, {}, [], []
+    param = robot.param_function(params)
     for c in robot.contacts:
         module, shape = robot.modules[c.module], robot.obstacles[c.obstacle]
         s, states = module_data[c.module][0], module_data[c.module][1]
-        g, n, point = contact_geometry(shape, module, states[:, int(np.argmin(np.abs(s - c.s)))])
+        state = states[:, int(np.argmin(np.abs(s - c.s)))]
+        g, n, point = contact_geometry(shape, module, state)
         force = float(forces[c.index])
         tangential, multiplier = (frictions or {}).get(c.index, (np.zeros(3), 0.0))
+        held, anchored = point, None
+        if robot.frictional(c):
+            held = _held(state, param, robot.contact_parameter(c, "offset"))
+            anchored = np.asarray(param(f"obstacles.{shape.name}.position"), float).ravel() + \
+                np.asarray(param(robot.contact_parameter(c, "anchor")), float).ravel()
         points, pushes = loads.setdefault(c.module, ([], []))
-        points.append(point)
-        pushes.append(force * n + tangential)
+        points += [point, held]
+        pushes += [force * n, np.asarray(tangential, float)]
         _closed_contact(module, c.s, "obstacle", shape.name, point, n, float(g), force, tangential, multiplier,
                         shape.friction, robot.frictional(c) and robot.friction_law == "coulomb",
-                        closed, warnings, pattern)
+                        closed, warnings, pattern, held, anchored)
     loads = {m: (np.array(p).T, np.array(f).T) for m, (p, f) in loads.items()}
     names = [shape.name for shape in robot.obstacles] + [body.name for body in robot.bodies]
     for name in names:
@@ -159,16 +167,19 @@ def body_results(robot, params, module_data, values):
     for c in robot.grips:
         module, body = robot.modules[c.module], robot.bodies[c.body]
         s, states = module_data[c.module][0], module_data[c.module][1]
-        g, n, point = contact_geometry(shapes[c.body], module, states[:, int(np.argmin(np.abs(s - c.s)))])
+        state = states[:, int(np.argmin(np.abs(s - c.s)))]
+        g, n, point = contact_geometry(shapes[c.body], module, state)
+        held = _held(state, param, robot.grip_parameter(c, "offset"))
+        r, R = placed[c.body]
+        anchored = r + R @ np.asarray(param(robot.grip_parameter(c, "anchor")), float).ravel()
         grip = np.asarray(values["grips"][c.index], float)
         force, tangential, multiplier = float(grip[0]), grip[1:4], float(grip[4])
-        on_rod = force * n + tangential
         points, pushes = loads.setdefault(c.module, ([], []))
-        points.append(point)
-        pushes.append(on_rod)
-        on_body[c.body].append((point, on_rod))
+        points += [point, held]
+        pushes += [force * n, tangential]
+        on_body[c.body] += [(point, force * n), (held, tangential)]
         _closed_contact(module, c.s, "object", body.name, point, n, float(g), force, tangential, multiplier,
-                        body.friction, body.sliding, closed, warnings, pattern)
+                        body.friction, body.sliding, closed, warnings, pattern, held, anchored)
     loads = {m: (np.array(p).T, np.array(f).T) for m, (p, f) in loads.items()}
     bodies, inertia = [], values.get("inertia") or [None] * len(robot.bodies)
     for body, (r, R), forces, inertial in zip(robot.bodies, placed, on_body, inertia):
@@ -218,9 +229,12 @@ def _support_message(body, result):
 def record_slides(robot, start, solution):
     """Mark in ``solution`` how far each closed grip's rod point moved over its body since the
     state the solve started from (``start``: the parameters it started at, whose history says
-    which grips stuck where; :attr:`ContactResult.slid`), with a ``slipping`` warning for a grip
-    that slid and is no longer sliding (one still sliding has its warning). Only Coulomb grips
-    slide (a sticking grip's point stays on its anchor). Returns ``solution``."""
+    which grips stuck where, the rod's material point and the body's point under it;
+    :attr:`ContactResult.slid`: how far apart those two points are now, along the body), with a
+    ``slipping`` warning for a grip that slid and is no longer sliding (one still sliding has
+    its warning). Only Coulomb grips slide (a sticking grip's material point stays on its
+    anchor; a finger that rolls moves its contact over the body without slipping). Returns
+    ``solution``."""
     if not robot.bodies or not solution.bodies or len(start) != robot.layout.size:
         return solution
     layout, found = robot.layout, {body.name: body for body in solution.bodies}
@@ -234,7 +248,10 @@ def record_slides(robot, start, solution):
         if grip is None:
             continue
         anchor = np.asarray(start[layout[robot.grip_parameter(c, "anchor")]], float)
-        moved = np.asarray(grip.position, float) - (result.position + result.rotation @ anchor)
+        offset = np.asarray(start[layout[robot.grip_parameter(c, "offset")]], float)
+        rod = solution.modules[c.module]
+        j = int(np.argmin(np.abs(rod.s - c.s)))
+        moved = rod.p[:, j] + rod.R[:, :, j] @ offset - (result.position + result.rotation @ anchor)
         moved = moved - np.dot(moved, grip.normal) * np.asarray(grip.normal, float)
         grip.slid = float(np.linalg.norm(moved))
         if grip.slipping and not grip.sliding and grip.friction_margin >= 0:
@@ -244,13 +261,20 @@ def record_slides(robot, start, solution):
     return solution
 
 
+def _held(state, param, name):
+    """The rod's material point that friction holds (3,) [m] at a node's deviation ``state``:
+    the history parameter ``name`` (an ``offset``) at ``param``."""
+    return np.asarray(held_point(state, np.asarray(param(name), float).ravel()), float).ravel()
+
+
 def _closed_contact(module, s, kind, name, point, n, g, force, tangential, multiplier, friction, coulomb, closed,
-                    warnings, pattern):
+                    warnings, pattern, held=None, anchored=None):
     """Append to ``closed`` the :class:`ContactResult` of a rod contact (module ``module`` at
-    arc length ``s`` against the ``kind`` (``object`` or ``obstacle``) ``name``) when it is
-    closed, to ``warnings`` a ``slipping`` warning when it needs more friction than it has
-    (``friction``) or slides (``coulomb``: on Coulomb's cone), to ``pattern`` the sides of its
-    complementarities' corners."""
+    arc length ``s`` against the ``kind`` (``object`` or ``obstacle``) ``name``; ``held`` the
+    material point its friction acts at, ``anchored`` the point of the body or obstacle its
+    anchor names) when it is closed, to ``warnings`` a ``slipping``
+    warning when it needs more friction than it has (``friction``) or slides (``coulomb``: on
+    Coulomb's cone), to ``pattern`` the sides of its complementarities' corners."""
     from ..model.bodies import slides
     fs = module.force_scale
     pattern.append(force / fs > g / outline_size(module))
@@ -262,7 +286,8 @@ def _closed_contact(module, s, kind, name, point, n, g, force, tangential, multi
         return
     slip = multiplier * outline_size(module) / fs * float(np.linalg.norm(tangential)) if sliding else 0.0
     result = ContactResult(module.name, float(s), name, point, n, force, np.asarray(tangential, float), g,
-                           float(friction), sliding=sliding, slip=slip)
+                           float(friction), sliding=sliding, slip=slip, held_at=point if held is None else held,
+                           anchored_at=anchored)
     closed.append(result)
     if result.slipping:
         warnings.append(PhysicsWarning("slipping", _slipping_message(kind, name, module, s, result)))
@@ -312,7 +337,7 @@ def build_solution(robot, params, module_data, tensions, lengths, result, method
     warnings = physics_warnings(robot, actuators, params)
     contacts, contact_loads, nearest, pattern = [], None, {}, ()
     if robot.obstacles:
-        contacts, contact_loads, nearest, found, pattern = contact_results(robot, modules, module_data,
+        contacts, contact_loads, nearest, found, pattern = contact_results(robot, params, module_data,
                                                                            contact_forces, clearance, frictions)
         warnings.extend(found)
     body_list = []

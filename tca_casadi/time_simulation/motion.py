@@ -175,16 +175,25 @@ class EnergyAccount:
 
 
 def _friction_work(before, after):
-    """The energy [J] friction took from the rods over a step: ``-sum f_t . (x_{n+1} - x_n)``
-    over the contacts closed at both ends (``contacts`` of the two StepOutputs; only a contact
-    closed at the step's start is anchored and carries friction), ``x`` the point in contact.
-    With Coulomb's law ``f_t`` opposes the slip, so it is never negative; a sticking contact
-    does not move."""
+    """The energy [J] friction took from the rods over a step: ``-sum f_t . slip`` over the
+    contacts against obstacles closed at both ends (``contacts`` of the two StepOutputs; only a
+    contact closed at the step's start is anchored and carries friction), the slip the rod's
+    held material point's motion over the step (:func:`_slip`). With Coulomb's law ``f_t``
+    opposes the slip, so it is never negative; a sticking contact does not move."""
     if getattr(after, "contacts", None) is None or getattr(before, "contacts", None) is None:
         return 0.0
-    was = {(c.module, c.s, c.obstacle): c.position for c in before.contacts}
-    return float(sum(-c.tangential_force @ (c.position - was[key]) for c in after.contacts
-                     if c.friction > 0 and (key := (c.module, c.s, c.obstacle)) in was))
+    was = {(c.module, c.s, c.obstacle) for c in before.contacts}
+    return float(sum(-c.tangential_force @ _slip(c) for c in after.contacts
+                     if c.friction > 0 and (c.module, c.s, c.obstacle) in was))
+
+
+def _slip(contact):
+    """How far a contact's held material point moved over its body or obstacle during the step
+    that ended at ``contact`` (3,) [m]: ``held_at - anchored_at``, the anchor taken where it was
+    held at the step's start (:func:`~tca_casadi.model.history.carried_history`)."""
+    if contact.anchored_at is None or contact.held_at is None:
+        return np.zeros(3)
+    return np.asarray(contact.held_at, float) - np.asarray(contact.anchored_at, float)
 
 
 def _support_impact_loss(before, after):
@@ -197,20 +206,17 @@ def _support_impact_loss(before, after):
 
 def _body_friction_work(before, after):
     """The energy [J] friction took at the free bodies over a step: at each grip closed at both
-    ends ``-f_t . slip``, ``f_t`` the force on the rod and the slip its point's motion relative to
-    the body's material point under it at the start (``x_{n+1} - r_{n+1} - R_{n+1} R_n^T (x_n -
-    r_n)``); at each corner pressed at both ends ``-F_t . (y_{n+1} - y_n)``, ``F_t`` the support's
-    force on the body."""
+    ends ``-f_t . slip``, ``f_t`` the force on the rod and the slip its held material point's
+    motion relative to the body's material point under it at the start (:func:`_slip`); at each
+    corner pressed at both ends ``-F_t . (y_{n+1} - y_n)``, ``F_t`` the support's force on the
+    body."""
     was, work = {body.name: body for body in before.bodies}, 0.0
     for body in after.bodies:
         start = was.get(body.name)
         if start is None:
             continue
-        gripped = {(c.module, c.s): c.position for c in start.grips}
-        for c in body.grips:
-            if (c.module, c.s) in gripped:
-                under = body.position + body.rotation @ start.rotation.T @ (gripped[c.module, c.s] - start.position)
-                work -= float(c.tangential_force @ (c.position - under))
+        gripped = {(c.module, c.s) for c in start.grips}
+        work -= float(sum(c.tangential_force @ _slip(c) for c in body.grips if (c.module, c.s) in gripped))
         if body.corners is not None and start.corners is not None:
             both = body.corners.pressed & start.corners.pressed
             moved = body.corners.positions - start.corners.positions

@@ -53,3 +53,27 @@ def test_a_straight_column_diverges_above_eulers_load_like_the_square_root_of_th
     np.testing.assert_allclose(fourfold.rates[0] / first.rates[0], 2.0, rtol=0.02)
     mode = 1.8751 ** 2 * np.sqrt(E * HEIGHT ** 2 / 12 / (1000 * LENGTH ** 4))    # clamped-free, 25.4 rad/s
     assert 0.5 * mode < double.rates[0] < 2 * mode
+
+
+def test_rectangular_fingers_pressing_flat_add_no_growth_rate_of_their_own():
+    """The pinch's cube held by fingers of a 2 x 1 mm rectangular section, each pressing a flat
+    side on it (the nearest outline point runs along that side as the finger twists). Friction
+    holds the fingers' material points, so the hanging cube's only real growth rate is its
+    inverted pendulum's, ``sqrt(m g d / I)`` (3 %; the fingers' compliance adds 2.4 %). When
+    friction held the nearest outline point instead, two more appeared, at 447/s and 801/s."""
+    from tca_casadi.studies.sequence import run_sequence
+    steps = "sequence=[{name: rest, set: {}}, {name: lift, set: {obstacles.table.position: [0, 0, -50 mm]}}]"
+    rect = "{shape: rectangle, width: 2 mm, height: 1 mm}"
+    sim = Simulation.from_file("scenarios/analytic/pinch_lift.yaml",
+                               [steps, f"modules.1.cross_section={rect}", f"modules.2.cross_section={rect}"])
+    hanging = run_sequence(sim).solutions[-1]
+    cube = hanging.bodies[0]
+    assert hanging.converged and not cube.resting and len(cube.grips) == 2
+    a, b = (np.asarray(c.position, float) for c in cube.grips)
+    line = (b - a) / np.linalg.norm(b - a)
+    arm = cube.position - a - ((cube.position - a) @ line) * line
+    d, m = np.linalg.norm(arm), 1e-4
+    inertia = m * (0.009 ** 2 + 0.009 ** 2) / 12 + m * d * d
+    found = growth_rates(RodDynamics(sim.robot, sim.solver("collocation"), "bdf2"), hanging)
+    assert found.residual < 1e-9 and found.rates.size == 1
+    np.testing.assert_allclose(found.rates[0], np.sqrt(m * 9.81 * d / inertia), rtol=0.03)
