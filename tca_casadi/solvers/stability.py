@@ -41,11 +41,29 @@ class GrowthRates:
 
 
 def growth_rates(dynamics, solution, lowest=0.1, highest=1e4, samples=64, rtol=1e-9):
-    """:class:`GrowthRates` of the static equilibrium ``solution`` (a converged Solution) in the
-    motion of ``dynamics`` (a :class:`~tca_casadi.solvers.dynamics.RodDynamics`, restarted
-    there at rest; friction anchored where the contacts touch, as a step would be): the sign of
-    ``det J(lambda)`` (module docstring) at ``samples`` rates from ``lowest`` to ``highest``
-    [1/s] (logarithmic), each change bisected to ``rtol``."""
+    """The real growth rates of small motions about a static equilibrium (module docstring).
+
+    Parameters
+    ----------
+    dynamics : RodDynamics
+        The rod dynamics of the robot (:class:`~tca_casadi.solvers.dynamics.RodDynamics`: its
+        damping counts); it is restarted at rest in ``solution``, friction anchored where the
+        contacts touch, as a time step would be.
+    solution : Solution
+        A converged static equilibrium of the same robot.
+    lowest, highest : float
+        The range of rates searched [1/s].
+    samples : int
+        How many rates (logarithmically spaced) the sign of ``det J(lambda)`` is evaluated at:
+        one sparse LU each.
+    rtol : float
+        Each sign change is bisected to this relative width.
+
+    Returns
+    -------
+    GrowthRates
+        The roots found [1/s], ascending, and the equilibrium's largest scaled residual.
+    """
     state = dynamics.start(solution)
     params = np.asarray(solution.parameters, float)
     if dynamics.robot.path_dependent:
