@@ -5,12 +5,12 @@ Jacobian's determinant and its smallest singular value, which show folds).
 ``w`` is the collocation NLP's scaled variable vector, ``P`` the robot's parameter vector.
 """
 import numpy as np
-import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from scipy.sparse.csgraph import connected_components
 
 #: COLAMD's column order is used when its LU fill is below this fraction of the natural order's
 COLAMD_FILL = 0.5
+#: parities of column orders in use: id -> (order, parity) (:attr:`OrderedLU.order_parity`)
+_ORDER_PARITY = {}
 
 
 class OrderedLU:
@@ -31,6 +31,17 @@ class OrderedLU:
         x = np.empty_like(permuted)
         x[self.order] = permuted
         return x
+
+    @property
+    def order_parity(self):
+        """The parity (+1, -1) of the column order, computed once per order (a system's order
+        is fixed at its first factorisation and shared by every LU after it)."""
+        key = id(self.order)
+        if _ORDER_PARITY.get(key, (None,))[0] is not self.order:
+            if len(_ORDER_PARITY) >= 64:
+                _ORDER_PARITY.clear()
+            _ORDER_PARITY[key] = (self.order, _parity(self.order))
+        return _ORDER_PARITY[key][1]
 
     @property
     def fill(self):
@@ -88,7 +99,7 @@ class Linearisation:
             if np.any(diagonal == 0):
                 self._sign = 0
             else:                            # det J[:, order] = det J sign(order)
-                sign = np.prod(np.sign(diagonal)) * (1 if order is None else _parity(order))
+                sign = np.prod(np.sign(diagonal)) * (1 if order is None else self.lu.order_parity)
                 self._sign = int(sign * _parity(factors.perm_r) * _parity(factors.perm_c))
         return self._sign
 
@@ -108,23 +119,17 @@ class Linearisation:
 
 
 def _parity(permutation):
-    """+1 for an even permutation, -1 for an odd one: ``(-1)^(n - cycles)``, the cycles counted
-    as connected components of the permutation's graph."""
-    permutation = np.asarray(permutation)
+    """+1 for an even permutation, -1 for an odd one: ``(-1)^(n - cycles)``. Each cycle is
+    labelled by its smallest index by pointer doubling (``ceil(log2 n)`` vectorised rounds: after
+    round k every entry holds the smallest index among its next ``2^k`` successors), so the
+    cycles are the entries that are their own label."""
+    permutation = np.asarray(permutation, dtype=np.intp)
     n = permutation.size
-    moved = np.flatnonzero(permutation != np.arange(n))
-    if moved.size == 0:                                 # the identity (natural column order): even
+    if n == 0 or np.array_equal(permutation, np.arange(n)):
         return 1
-    if moved.size <= 64:                                # few pivots moved rows: follow their cycles
-        seen, transpositions = set(), 0
-        for start in moved.tolist():
-            length, k = 0, start
-            while k not in seen:
-                seen.add(k)
-                k = int(permutation[k])
-                length += 1
-            transpositions += max(length - 1, 0)
-        return -1 if transpositions % 2 else 1
-    graph = sp.csr_matrix((np.ones(n), (np.arange(n), permutation)), shape=(n, n))
-    cycles = connected_components(graph, directed=True, connection="weak")[0]
+    label, successor = np.arange(n), permutation.copy()
+    for _ in range(max(int(np.ceil(np.log2(n))), 1)):
+        label = np.minimum(label, label[successor])
+        successor = successor[successor]
+    cycles = int(np.count_nonzero(label == np.arange(n)))
     return -1 if (n - cycles) % 2 else 1
