@@ -122,7 +122,7 @@ def contact_results(robot, params, module_data, forces, clearance=None, friction
         tangential, multiplier = (frictions or {}).get(c.index, (np.zeros(3), 0.0))
         held, anchored = point, None
         if robot.frictional(c):
-            held = _held(state, param, robot.contact_parameter(c, "offset"))
+            held = _material_point(state, param, robot.contact_parameter(c, "offset"))
             anchored = np.asarray(param(f"obstacles.{shape.name}.position"), float).ravel() + \
                 np.asarray(param(robot.contact_parameter(c, "anchor")), float).ravel()
         points, pushes = loads.setdefault(c.module, ([], []))
@@ -169,7 +169,7 @@ def body_results(robot, params, module_data, values):
         s, states = module_data[c.module][0], module_data[c.module][1]
         state = states[:, int(np.argmin(np.abs(s - c.s)))]
         g, n, point = contact_geometry(shapes[c.body], module, state)
-        held = _held(state, param, robot.grip_parameter(c, "offset"))
+        held = _material_point(state, param, robot.grip_parameter(c, "offset"))
         r, R = placed[c.body]
         anchored = r + R @ np.asarray(param(robot.grip_parameter(c, "anchor")), float).ravel()
         grip = np.asarray(values["grips"][c.index], float)
@@ -261,7 +261,7 @@ def record_slides(robot, start, solution):
     return solution
 
 
-def _held(state, param, name):
+def _material_point(state, param, name):
     """The rod's material point that friction holds (3,) [m] at a node's deviation ``state``:
     the history parameter ``name`` (an ``offset``) at ``param``."""
     return np.asarray(held_point(state, np.asarray(param(name), float).ravel()), float).ravel()
