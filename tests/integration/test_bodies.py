@@ -153,14 +153,20 @@ def test_bad_contact_objects(change, message):
         Simulation.from_file(raw).solve()
 
 
-def test_physical_pick_and_place():
+@pytest.fixture(scope="module")
+def pick_and_place():
+    """``(sim, SequenceResult)`` of scenarios/arm_pick_and_place_contact.yaml's sequence."""
+    from tca_casadi.studies.sequence.steps import run_sequence
+    sim = Simulation.from_file("scenarios/arm_pick_and_place_contact.yaml")
+    return sim, run_sequence(sim)
+
+
+def test_physical_pick_and_place(pick_and_place):
     """scenarios/arm_pick_and_place_contact.yaml: both fingertips press on the bar, its weight
     reaches the arm only through them (friction), it rises with the arm and turns with it; the
     bent arm puts it down (it lands and lies flat on the table, four corners pressed), the
     gripper opens and lets go of it, and it stays where it was put when the arm rises."""
-    from tca_casadi.studies.sequence.steps import run_sequence
-    sim = Simulation.from_file("scenarios/arm_pick_and_place_contact.yaml")
-    result = run_sequence(sim)
+    _, result = pick_and_place
     assert result.converged
     step = dict(zip(result.names, result.solutions))
     closing, lifting, turning, bent, down, released, clear = (step[n] for n in (
@@ -192,6 +198,24 @@ def test_physical_pick_and_place():
         assert not bar.grips
         assert_allclose(bar.support_force, [0, 0, weight], rtol=0, atol=1e-12)
     assert_allclose(clear.bodies[0].position, released.bodies[0].position, rtol=0, atol=1e-12)
+
+
+def test_the_arms_grasp_stays_at_rest_in_motion(pick_and_place):
+    """Rod dynamics (BDF2, 2 ms) started at rest where the sequence lifted the bar, nothing
+    changing: the bar stays, its speed at roundoff over 0.2 s. When friction held the fingertips'
+    nearest outline points (which run along the bar's face as a fingertip tilts), this grasp
+    was unstable at about 130/s: by 0.2 s the bar was falling (docs/contact.md section 5b)."""
+    from tca_casadi.solvers.dynamics import RodDynamics
+    sim, result = pick_and_place
+    lifting = dict(zip(result.names, result.solutions))["arm lifts the bar"]
+    dynamics = RodDynamics(sim.robot, sim.solver("collocation"), "bdf2")
+    state, params = dynamics.start(lifting), np.array(lifting.parameters, float)
+    speeds = []
+    for _ in range(100):
+        state = dynamics.advance(params, 0.002)
+        assert state is not None, dynamics.last_status.message
+        speeds.append(np.linalg.norm(state.bodies[6:9, 0]))
+    assert max(speeds) < 1e-9
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
