@@ -139,7 +139,8 @@ class ContactResult:
                 "normal_force": self.normal_force, "tangential_force": np.asarray(self.tangential_force).tolist(),
                 "gap": self.gap, "friction": self.friction, "friction_margin": self.friction_margin,
                 "needed_friction": self.needed_friction, "slipping": self.slipping, "sliding": self.sliding,
-                "slip": self.slip, "slid": self.slid}
+                "slip": self.slip, "slid": self.slid,
+                "held_at": None if self.held_at is None else np.asarray(self.held_at).tolist()}
 
 
 #: a contact object's table columns (:meth:`Solution.contact_columns`), in order
