@@ -32,6 +32,15 @@ class OrderedLU:
         x[self.order] = permuted
         return x
 
+    def determinant_sign(self):
+        """Sign (+1, -1; 0 if singular) of ``det J`` from the factors: ``det J[:, order] = det J
+        sign(order)``, and SuperLU's ``Pr A Pc = L U`` with L unit lower triangular."""
+        diagonal = self.factors.U.diagonal()
+        if np.any(diagonal == 0):
+            return 0
+        sign = np.prod(np.sign(diagonal)) * (1 if self.order is None else self.order_parity)
+        return int(sign * _parity(self.factors.perm_r) * _parity(self.factors.perm_c))
+
     @property
     def order_parity(self):
         """The parity (+1, -1) of the column order, computed once per order (a system's order
@@ -94,13 +103,7 @@ class Linearisation:
         """Sign (+1, -1; 0 if singular) of ``det J_w``: a change between two points of a branch
         means a fold or a bifurcation lies between them. Computed once."""
         if getattr(self, "_sign", None) is None:
-            factors, order = self.lu.factors, self.lu.order
-            diagonal = factors.U.diagonal()
-            if np.any(diagonal == 0):
-                self._sign = 0
-            else:                            # det J[:, order] = det J sign(order)
-                sign = np.prod(np.sign(diagonal)) * (1 if order is None else self.lu.order_parity)
-                self._sign = int(sign * _parity(factors.perm_r) * _parity(factors.perm_c))
+            self._sign = self.lu.determinant_sign()
         return self._sign
 
     def smallest_singular_value(self, iterations=6, seed=0):

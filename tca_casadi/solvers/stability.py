@@ -21,7 +21,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.history import carried_history
-from .linearisation import Linearisation
 
 
 @dataclass
@@ -71,15 +70,14 @@ def growth_rates(dynamics, solution, lowest=0.1, highest=1e4, samples=64, rtol=1
     at_rest = dynamics._history_values(state)
     square = dynamics.solver.square
 
-    def jacobian(rate):
-        full = dynamics.solver.parameters(params, rate, dynamics.damping, [-rate * x for x in at_rest])
-        return square.evaluate(state.w, full)
+    def at(rate):
+        return dynamics.solver.parameters(params, rate, dynamics.damping, [-rate * x for x in at_rest])
 
     def sign(rate):
-        _, J = jacobian(rate)
-        return Linearisation(np.zeros(1), J, J, None, None, square.factorise).determinant_sign()
+        _, J = square.evaluate(state.w, at(rate))
+        return square.factorise(J).determinant_sign()
 
-    residual = float(np.abs(jacobian(lowest)[0]).max())
+    residual = float(np.abs(square.residual(state.w, at(lowest))).max())
     grid = np.geomspace(lowest, highest, samples)
     signs = [sign(rate) for rate in grid]
     rates = []
