@@ -418,13 +418,18 @@ class TimeSimulation:
 
     @staticmethod
     def _object_report(series):
-        """Per object: when it was picked and put down [s] and where it ended [m]."""
+        """Per object: when it was picked and put down [s], when a grip of a free body started
+        sliding over it (``slides_at`` [s]: Coulomb's law, dynamics) and where it ended [m]."""
         out = {}
         for name in (series.objects[0] if series.objects else {}):
             held = [poses[name].held for poses in series.objects]
             changes = [k for k in range(1, len(held)) if held[k] != held[k - 1]]
+            sliding = [any(c.sliding for b in (getattr(view, "bodies", None) or []) if b.name == name for c in b.grips)
+                       for view in (series.views or [])[:len(held)]]
             out[name] = {"picked_at": [float(series.t[k]) for k in changes if held[k]],
                          "put_down_at": [float(series.t[k]) for k in changes if not held[k]],
+                         "slides_at": [float(series.t[k]) for k in range(len(sliding))
+                                       if sliding[k] and (k == 0 or not sliding[k - 1])],
                          "final_center": series.objects[-1][name].center.tolist(), "held_at_end": held[-1],
                          "held_at_start": held[0]}
         return out
@@ -472,7 +477,9 @@ class TimeSimulation:
             down = f"put down at {down} s" if down else "never put down"
             centre = " ".join(f"{v * 1e3:+.2f}" for v in entry["final_center"])
             picked = picked if picked.startswith("held") or picked == "never" else f"picked at {picked} s"
-            lines.append(f"  {name}: {picked}, {down}; ends at [{centre}] mm")
+            slides = ", ".join(f"{t:g}" for t in entry["slides_at"])
+            slides = f", SLIDES in its grip from {slides} s" if slides else ""
+            lines.append(f"  {name}: {picked}{slides}, {down}; ends at [{centre}] mm")
         if report["dynamics"] is not None:
             motion = report["dynamics"]
             lines.append(f"  dynamics ({motion['integrator']}): peak tip speed {motion['peak_tip_speed'] * 1e3:.4g} mm/s, "
