@@ -258,3 +258,23 @@ def test_random_pinches_obey_the_balance_laws(seed):
     # block's weight, nothing sideways
     total = sum(c.force for c in body.grips)
     assert_allclose(total, [0, 0, -mass * 9.81], rtol=0, atol=1e-12)
+
+
+def test_the_physical_pick_and_place_grasp_agrees_with_shooting(pick_and_place):
+    """The contact pick-and-place (friction, a free bar on a table) followed by collocation to
+    the grasp; shooting at that step's parameters (the path's contact history) from its solution
+    converges to the same equilibrium, the two grip forces included. (`sequence --check` does
+    this at every step: the whole sequence, lift and put-down included, agrees to 3.7e-8 m,
+    docs/contact.md.)"""
+    from tca_casadi.studies.compare import compare_solutions
+    sim, result = pick_and_place
+    assert result.names[4] == "gripper closes on the bar"
+    gripped = result.solutions[4]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        shooting = sim.solver("shooting")
+        shooting.sample_s = [m.s for m in gripped.modules]
+        report = compare_solutions(gripped, shooting.solve(gripped.parameters, gripped))
+    assert report.agree, report.summary()
+    assert len(report.contact_differences) == 2 and report.worst_relative_contact <= 1e-5
+    assert all(c.normal_force > 1e-3 for c in gripped.contacts if c.obstacle == "bar")

@@ -8,7 +8,6 @@ import warnings
 import numpy as np
 import pytest
 
-from conftest import SCENARIOS
 from .test_contact import pushed, random_obstacle_scenarios
 from tca_casadi.model.contact import outline_of
 from tca_casadi.model.obstacles import gap
@@ -73,25 +72,3 @@ def test_a_grasped_free_body_agrees_in_both_solvers():
     report = compare_solutions(squeezed, shot)
     assert squeezed.contacts and report.agree, report.summary()
     assert report.worst_relative_contact <= 1e-5 and max(report.body_differences.values()) <= 1e-9
-
-
-def test_the_physical_pick_and_place_grasp_agrees():
-    """The contact pick-and-place (friction, a free bar on a table) followed by collocation to
-    the grasp; shooting at that step's parameters (the path's contact history) from its solution
-    converges to the same equilibrium, the two grip forces included. (`sequence --check` does
-    this at every step: the whole sequence, lift and put-down included, agrees to 3.7e-8 m,
-    docs/contact.md.)"""
-    from tca_casadi.studies.compare import compare_solutions
-    from tca_casadi.studies.sequence.steps import run_sequence
-    sim = Simulation.from_file(SCENARIOS / "arm_pick_and_place_contact.yaml")
-    steps = sim.scenario.sequence[:5]
-    assert steps[-1].name == "gripper closes on the bar"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        gripped = run_sequence(sim, steps).solutions[-1]
-        shooting = sim.solver("shooting")
-        shooting.sample_s = [m.s for m in gripped.modules]
-        report = compare_solutions(gripped, shooting.solve(gripped.parameters, gripped))
-    assert report.agree, report.summary()
-    assert len(report.contact_differences) == 2 and report.worst_relative_contact <= 1e-5
-    assert all(c.normal_force > 1e-3 for c in gripped.contacts if c.obstacle == "bar")
