@@ -21,6 +21,7 @@ class Status(IntEnum):
     INTEGRATION_FAILED = 7
     STALLED = 8
     NO_EQUILIBRIUM = 9
+    CYCLING = 10
 
 
 #: what each status means
@@ -35,6 +36,7 @@ MESSAGES = {
     Status.INTEGRATION_FAILED: "the integration of a shot failed",
     Status.STALLED: "continuation stalled before the requested parameters",
     Status.NO_EQUILIBRIUM: "no equilibrium at the answer",
+    Status.CYCLING: "the semismooth steps went round without cutting the residual (contacts switching back and forth)",
 }
 
 

@@ -75,6 +75,50 @@ def skipped(command):
     return any(part in command for part in SKIPPED)
 
 
+#: transcripts run (once) by the test that uses their result, in its process, rather than again
+#: by the documentation tests: ``{page: commands}``
+RUN_BY_THEIR_TESTS = {
+    "docs/robots.md": ("tca-casadi sequence scenarios/arm_pick_and_place_contact.yaml "
+                       "-o results/pick_and_place_contact --no-animation",),      # tests/integration/test_bodies.py
+}
+
+
+def run_by_its_test(page, command):
+    """Whether ``command`` on ``page`` is in :data:`RUN_BY_THEIR_TESTS`."""
+    return command in RUN_BY_THEIR_TESTS.get(page, ())
+
+
+def run_transcript_here(root, workdir, page, command, keep):
+    """Run ``command``, shown on ``page`` (a :data:`RUN_BY_THEIR_TESTS` entry), in this process in
+    ``workdir`` (a :func:`fresh_copy` of ``root``); assert its output shows what the page does,
+    as :func:`run_transcript` would. ``keep``: the dotted path of the callable that does the
+    command's work (e.g. its run function); returns ``(args, value)``: what it was called with
+    and returned."""
+    import contextlib
+    import importlib
+    import io
+    import os
+    from unittest import mock
+    from tca_casadi import cli
+    shown = dict(transcripts((root / page).read_text()))
+    assert run_by_its_test(page, command) and command in shown, (page, command)
+    module, name = keep.rsplit(".", 1)
+    original, kept = getattr(importlib.import_module(module), name), []
+    out, here = io.StringIO(), os.getcwd()
+    try:
+        os.chdir(workdir)
+        with mock.patch(keep, lambda *a, **k: kept.append((a, original(*a, **k))) or kept[-1][1]), \
+                contextlib.redirect_stdout(out), contextlib.redirect_stderr(out):
+            code = cli.main(shlex.split(command)[1:])
+    finally:
+        os.chdir(here)
+    output = out.getvalue().rstrip("\n").splitlines()
+    assert code in (0, 1) and len(kept) == 1, "\n".join(output)
+    for line in shown[command]:
+        assert any(matches(line, got) for got in output), f"{line!r} not in:\n" + "\n".join(output)
+    return kept[0]
+
+
 def run_shell_block(workdir, block):
     """Run every line of a ``bash`` block in ``workdir`` (``tca-casadi`` and ``python`` as this
     interpreter's), each exiting 0, skipping :data:`SKIPPED` lines."""

@@ -36,6 +36,10 @@ NATIVE_CHORD_CONTRACTION = 0.3
 #: a semismooth Newton step taken without descent moves the rods' scaled states (positions in
 #: module lengths, strains) by at most this much (the forces and multipliers as far as it says)
 SEMISMOOTH_STEP = 0.5
+#: semismooth Newton stops when this many iterations in a row have not brought the residual
+#: below its best so far: its steps go round (contacts sticking and sliding, closing and opening
+#: in turn; the caller tries a shorter step), where it used to spend all its iterations
+CYCLE_ITERATIONS = 16
 
 
 def roundoff_floor(J, w):
@@ -111,7 +115,8 @@ class SquareSystem:
         no backtracked step cuts ``|g|_2``, the step is taken all the same, capped at
         :data:`SEMISMOOTH_STEP` in the rods' scaled states (semismooth Newton on complementarity: a
         contact that closes, where the residual's kink defeats the line search; the cap keeps it
-        from roots far away). Returns ``(w, SolveStatus)``."""
+        from roots far away), stopping once :data:`CYCLE_ITERATIONS` in a row leave the residual
+        above its best. Returns ``(w, SolveStatus)``."""
         started = time.perf_counter()
         w, fresh = np.array(w0, float), False
         g = self.residual(w, P)
@@ -128,7 +133,7 @@ class SquareSystem:
             return w, status
 
         before = np.inf                          # the residual before the last fresh Newton step
-        iteration = 0
+        iteration, best = 0, (np.inf, 0)         # the smallest residual so far and its iteration
         while True:
             residual = float(np.max(np.abs(g))) if g.size else 0.0
             if not np.isfinite(residual):
@@ -139,6 +144,10 @@ class SquareSystem:
                 return ended(iteration, floored=True)
             if iteration >= max_iterations:
                 break
+            if residual < best[0]:
+                best = (residual, iteration)
+            elif not monotone and iteration - best[1] >= CYCLE_ITERATIONS:
+                return ended(iteration, Status.CYCLING)
             if lu is not None and not fresh:
                 taken = self._chord_steps(w, g, P, lu, tolerance, max_iterations - iteration)
                 if taken:

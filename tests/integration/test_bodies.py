@@ -1,5 +1,6 @@
 """Free rigid bodies held by contact and friction (issue 17; docs/contact.md sections 4-5)."""
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -154,11 +155,17 @@ def test_bad_contact_objects(change, message):
 
 
 @pytest.fixture(scope="module")
-def pick_and_place():
-    """``(sim, SequenceResult)`` of scenarios/arm_pick_and_place_contact.yaml's sequence."""
-    from tca_casadi.studies.sequence.steps import run_sequence
-    sim = Simulation.from_file("scenarios/arm_pick_and_place_contact.yaml")
-    return sim, run_sequence(sim)
+def pick_and_place(tmp_path_factory):
+    """``(sim, SequenceResult)`` of scenarios/arm_pick_and_place_contact.yaml's sequence, run by
+    the command docs/robots.md shows, whose transcript this checks (the documentation tests
+    leave it to this fixture: one 20 s run, not two)."""
+    from transcripts import fresh_copy, run_transcript_here
+    root = Path(__file__).resolve().parents[2]
+    command = ("tca-casadi sequence scenarios/arm_pick_and_place_contact.yaml -o results/pick_and_place_contact "
+               "--no-animation")
+    args, result = run_transcript_here(root, fresh_copy(tmp_path_factory.mktemp("robots_md"), root),
+                                       "docs/robots.md", command, "tca_casadi.studies.sequence.steps.run_sequence")
+    return args[0], result
 
 
 def test_physical_pick_and_place(pick_and_place):

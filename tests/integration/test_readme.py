@@ -6,7 +6,9 @@ match exactly, the command-line synopsis matches ``--help``, and every dotted pa
 example names something in a shipped scenario.
 
 Long runs (the test command itself, installs, benchmarks, the arm's ``--check`` sequence) are
-listed in ``transcripts.SKIPPED`` and run elsewhere (CI, ``scripts/``)."""
+listed in ``transcripts.SKIPPED`` and run elsewhere (CI, ``scripts/``); a long run whose result a
+test uses (``transcripts.RUN_BY_THEIR_TESTS``) is run once, by that test, which checks its
+transcript."""
 import re
 from pathlib import Path
 
@@ -14,7 +16,8 @@ import pytest
 
 from tca_casadi import cli
 
-from transcripts import fenced_blocks, fresh_copy, run_shell_block, run_transcript, skipped, transcripts
+from transcripts import (fenced_blocks, fresh_copy, run_by_its_test, run_shell_block, run_transcript, skipped,
+                         transcripts)
 
 ROOT = Path(__file__).resolve().parents[2]
 #: the pages this file runs: the README and the reference pages it moved to the documentation
@@ -40,7 +43,7 @@ def workdir(tmp_path_factory):
     return fresh_copy(tmp_path_factory.mktemp("readme"), ROOT)
 
 
-STEPS = [t for t in _transcripts() if not skipped(t[1])]
+STEPS = [t for t in _transcripts() if not skipped(t[1]) and not run_by_its_test(t[0], t[1])]
 PYTHON = [(page, k, code) for k, (page, code) in enumerate(_blocks("python"))]
 
 
