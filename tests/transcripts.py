@@ -76,10 +76,13 @@ def skipped(command):
 
 
 #: transcripts run (once) by the test that uses their result, in its process, rather than again
-#: by the documentation tests: ``{page: commands}``
+#: by the documentation tests: ``{page (from the repository's root): commands}``
 RUN_BY_THEIR_TESTS = {
     "docs/robots.md": ("tca-casadi sequence scenarios/arm_pick_and_place_contact.yaml "
                        "-o results/pick_and_place_contact --no-animation",),      # tests/integration/test_bodies.py
+    "docs/tutorials/contact.md": ("tca-casadi simulate scenarios/analytic/pinch_lift.yaml --dt 0.002 --set "
+                                  "timeline.1.set.gravity=[0,0,-17.81] -o results/pinch_lift_fast --quiet "
+                                  "--no-animation",),                            # tests/integration/test_dynamics_bodies.py
 }
 
 
@@ -95,15 +98,14 @@ def run_transcript_here(root, workdir, page, command, keep):
     command's work (e.g. its run function); returns ``(args, value)``: what it was called with
     and returned."""
     import contextlib
-    import importlib
     import io
     import os
+    import pkgutil
     from unittest import mock
     from tca_casadi import cli
     shown = dict(transcripts((root / page).read_text()))
     assert run_by_its_test(page, command) and command in shown, (page, command)
-    module, name = keep.rsplit(".", 1)
-    original, kept = getattr(importlib.import_module(module), name), []
+    original, kept = pkgutil.resolve_name(keep), []
     out, here = io.StringIO(), os.getcwd()
     try:
         os.chdir(workdir)

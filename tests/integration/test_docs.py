@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 from numpy.testing import assert_allclose
 
-from transcripts import fenced_blocks, fresh_copy, run_shell_block, run_transcript, skipped, transcripts
+from transcripts import (fenced_blocks, fresh_copy, run_by_its_test, run_shell_block, run_transcript, skipped,
+                         transcripts)
 
 ROOT = Path(__file__).resolve().parents[2]
 #: the pages whose examples run here: every page of the site but the reference pages that
@@ -91,7 +92,7 @@ def workdir(tmp_path_factory):
 
 
 STEPS = [(page.name, command, expected) for page in TUTORIALS for command, expected in transcripts(page.read_text())
-         if not skipped(command)]
+         if not skipped(command) and not run_by_its_test(page.relative_to(ROOT).as_posix(), command)]
 SHELL = [(page.name, text) for page in TUTORIALS for kind, text in fenced_blocks(page.read_text()) if kind == "bash"]
 PYTHON = [(page.name, k, text) for page in TUTORIALS
           for k, text in enumerate(t for kind, t in fenced_blocks(page.read_text()) if kind == "python")]
