@@ -6,6 +6,13 @@ from contextlib import contextmanager
 from .errors import ResourceError
 
 
+def cache_root():
+    """Where the project keeps what it computed once per machine (compiled Functions, unit
+    conversions): ``$TCA_CASADI_CACHE`` or ``~/.cache/tca_casadi``."""
+    from pathlib import Path
+    return Path(os.environ.get("TCA_CASADI_CACHE") or Path.home() / ".cache" / "tca_casadi")
+
+
 def available_memory():
     """Bytes of memory available to this process (Linux ``MemAvailable``, else the physical
     memory; at most what an address-space limit, ``ulimit -v``, leaves), or None when unknown."""

@@ -3,25 +3,111 @@
 Plain numbers are SI (m, N, Pa, kg, rad), temperatures are degC. A string carries its unit:
 ``"45 mm"``, ``"0.125 MPa"``, ``"120 deg"``, ``"5 g"``, ``"100 degC"``, ``"373.15 K"``.
 """
+import functools
+import json
 import math
+import os
 import re
+import tempfile
+from pathlib import Path
 
 import numpy as np
-import pint
 
+from .resources import cache_root
 from .text import clip, shorten, unit_text  # noqa: F401  (messages cut long values alike)
 
 
+@functools.cache
 def _registry():
     """pint's unit registry, its parsed definitions cached on disk by pint (``~/.cache/pint``:
-    30 ms instead of 190 ms a process); without the cache where it cannot be used."""
+    30 ms instead of 190 ms a process); without the cache where it cannot be used. pint is
+    imported here, on the first conversion that :data:`_CONVERSIONS` does not know."""
+    import pint
     try:
         return pint.UnitRegistry(cache_folder=":auto:")
     except Exception:             # an unwritable or damaged cache: parse the definitions
         return pint.UnitRegistry()
 
 
-ureg = _registry()
+def __getattr__(name):
+    """``ureg``: pint's registry, made on first use (module ``__getattr__``, PEP 562)."""
+    if name == "ureg":
+        return _registry()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+class Conversions:
+    """What pint said a unit converts to, kept on disk: ``(source, target) -> (scale, offset)``
+    with ``target value = scale * source value + offset`` (every conversion pint makes between
+    the units here is affine: a factor, or an offset for degC and degF). A command whose units
+    were all seen before then does not import pint (0.17 s of each process, dask's import
+    included). pint remains the authority: a new pair is converted by pint, and is kept only if
+    the affine map reproduces pint's answer at the value asked and one more (1e-12 relative); a kept pair
+    is converted by its map from the first time on, so that a value does not depend on whether
+    the file existed. The file,
+    ``units.json`` in ``$TCA_CASADI_CACHE`` or ``~/.cache/tca_casadi``, records pint's version; a
+    different version starts it afresh. It is replaced atomically; where it cannot be written,
+    nothing is kept."""
+
+    def __init__(self, path=None):
+        self.path = Path(path) if path is not None else cache_root() / "units.json"
+        self._maps = None
+
+    def convert(self, number, source, target):
+        """``number`` in ``source`` units expressed in ``target`` units (pint's errors raised
+        as pint raises them, for a pair it cannot convert)."""
+        key = f"{source}\u2192{target}"
+        maps = self._loaded()
+        if key in maps:
+            scale, offset = maps[key]
+            return scale * number + offset
+        registry = _registry()
+        converted = float(registry.Quantity(number, source).to(target).magnitude)
+        try:
+            at_zero = float(registry.Quantity(0.0, source).to(target).magnitude)
+            scale = float(registry.Quantity(1.0, source).to(target).magnitude) - at_zero
+            probe = 1.0 + abs(number)
+            check = float(registry.Quantity(probe, source).to(target).magnitude)
+        except Exception:                 # not affine where pint is asked (none such here yet)
+            return converted
+        affine = all(math.isclose(scale * x + at_zero, y, rel_tol=1e-12, abs_tol=1e-12 * abs(at_zero))
+                     for x, y in ((number, converted), (probe, check)))
+        if not affine:
+            return converted
+        maps[key] = (scale, at_zero)
+        self._save()
+        return scale * number + at_zero            # as every later process will (to the last bit)
+
+    def _loaded(self):
+        if self._maps is None:
+            self._maps = {}
+            try:
+                stored = json.loads(self.path.read_text())
+                if stored.get("pint") == _pint_version():
+                    self._maps = {key: tuple(value) for key, value in stored["maps"].items()}
+            except (OSError, ValueError, KeyError, TypeError, AttributeError):
+                pass
+        return self._maps
+
+    def _save(self):
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            with tempfile.NamedTemporaryFile("w", dir=self.path.parent, prefix=".units-", suffix=".json",
+                                             delete=False) as handle:
+                json.dump({"pint": _pint_version(), "maps": self._maps}, handle, indent=0)
+            os.replace(handle.name, self.path)
+        except OSError:
+            pass
+
+
+@functools.cache
+def _pint_version():
+    from importlib.metadata import version
+    return version("pint")
+
+
+#: the conversions of this process (:class:`Conversions`)
+_CONVERSIONS = Conversions()
 
 #: quantity kind -> (SI unit that plain numbers are taken in, human name)
 KINDS = {
@@ -147,15 +233,19 @@ def _parse_string(text, si_unit, name):
     if not unit:
         return number
     try:
-        quantity = ureg.Quantity(number, unit)
-        return float(quantity.to(si_unit or "dimensionless").magnitude)
-    except pint.errors.UndefinedUnitError:
+        return float(_CONVERSIONS.convert(number, unit, si_unit or "dimensionless"))
+    except _pint_errors().UndefinedUnitError:
         raise ValueError(f"unknown unit {shorten(unit)} in {shorten(text)}") from None
-    except pint.errors.DimensionalityError:
+    except _pint_errors().DimensionalityError:
         raise ValueError(f"{shorten(text)} is not {name} (expected units convertible to "
                          f"{si_unit or 'a plain number'})") from None
     except Exception:   # pint's parser raises many kinds (ZeroDivisionError, TokenError, ...)
         raise ValueError(f"cannot read the unit {shorten(unit)} in {shorten(text)}") from None
+
+
+def _pint_errors():
+    import pint
+    return pint.errors
 
 
 # ---------------------------------------------------------------------- showing quantities
@@ -193,7 +283,7 @@ def readable_unit(kind, values):
         return KINDS[kind][0]
     largest = float(finite.max())
     for unit in choices:
-        if largest * ureg.Quantity(1.0, KINDS[kind][0]).to(unit).magnitude >= 1.0 - 1e-12:
+        if largest * _CONVERSIONS.convert(1.0, KINDS[kind][0], unit) >= 1.0 - 1e-12:
             return unit
     return choices[-1]
 
@@ -203,8 +293,8 @@ def in_unit(value, kind, unit):
     si = KINDS[kind][0]
     if not unit or unit == si or kind == "temperature":
         return value
-    return ureg.Quantity(1.0, si).to(unit).magnitude * np.asarray(value, float) if np.ndim(value) \
-        else float(ureg.Quantity(float(value), si).to(unit).magnitude)
+    return _CONVERSIONS.convert(1.0, si, unit) * np.asarray(value, float) if np.ndim(value) \
+        else float(_CONVERSIONS.convert(float(value), si, unit))
 
 
 def show(value, kind, unit=None, digits=6, plain=None):

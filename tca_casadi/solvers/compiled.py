@@ -29,8 +29,8 @@ OPTIMISED_BYTES = 1_000_000
 def cache_directory():
     """Where compiled Functions are kept: ``$TCA_CASADI_CACHE`` or ``~/.cache/tca_casadi``,
     in a ``jit`` subdirectory."""
-    root = os.environ.get("TCA_CASADI_CACHE") or Path.home() / ".cache" / "tca_casadi"
-    return Path(root) / "jit"
+    from ..resources import cache_root
+    return cache_root() / "jit"
 
 
 def compiler():

@@ -102,3 +102,54 @@ def test_the_unit_registry_is_cached_on_disk_where_it_can_be(tmp_path, usable):
         assert folder == str(home / "pint") and any((home / "pint").iterdir())
     else:
         assert folder == "None"
+
+
+PROBE = ("import sys; from tca_casadi.units import to_si, in_unit\n"
+         "values = [to_si(v, k) for v, k in {asked!r}] + [in_unit(0.0125, 'length', 'mm')]\n"
+         "print(repr(values), 'pint' in sys.modules)")
+ASKED = [("45 mm", "length"), ("0.125 MPa", "pressure"), ("373.15 K", "temperature"), ("50 degF", "temperature"),
+         ("5 g", "mass"), ("120 deg", "angle"), ("37.58 MPa/N^2", "pressure_per_force2")]
+
+
+def _fresh_process(cache, asked=ASKED):
+    """``(values, pint imported)`` of :data:`PROBE` in a fresh process whose cache is ``cache``."""
+    import os
+    import subprocess
+    import sys
+    run = subprocess.run([sys.executable, "-c", PROBE.format(asked=asked)], capture_output=True, text=True,
+                         timeout=120, env={**os.environ, "TCA_CASADI_CACHE": str(cache)})
+    assert run.returncode == 0, run.stderr
+    values, imported = run.stdout.rsplit(" ", 1)
+    return eval(values), imported.strip() == "True"
+
+
+def test_conversions_pint_made_once_are_read_from_disk_without_pint(tmp_path):
+    """A fresh cache: pint converts (and is imported); the next process converts the same
+    quantities from ``units.json`` without importing pint, to the same bits, which are pint's to
+    1e-12 (temperatures with their offsets: 373.15 K and 50 degF are 100 and 10 degC). A file of
+    another pint version is not used; a new unit still goes to pint."""
+    import json
+    first, imported = _fresh_process(tmp_path)
+    assert imported
+    second, imported = _fresh_process(tmp_path)
+    assert not imported and second == first
+    np.testing.assert_allclose(first, [0.045, 125e3, 100.0, 10.0, 5e-3, 2 * math.pi / 3, 37.58e6, 12.5],
+                               rtol=1e-12, atol=1e-12)
+    stored = json.loads((tmp_path / "units.json").read_text())
+    assert stored["maps"]["K\u2192degC"] == [1.0, -273.15]
+    assert _fresh_process(tmp_path, ASKED + [("2 inch", "length")]) == (first[:-1] + [0.0508, 12.5], True)
+    stored["pint"] = "0.0"
+    (tmp_path / "units.json").write_text(json.dumps(stored))
+    assert _fresh_process(tmp_path) == (first, True)
+
+
+def test_a_cache_that_cannot_be_written_or_read_changes_nothing(tmp_path):
+    """The cache root is a file (nothing can be kept) or ``units.json`` is damaged: the values
+    are the same, from pint."""
+    blocked = tmp_path / "blocked"
+    blocked.write_text("")
+    reference, _ = _fresh_process(tmp_path / "fresh")
+    assert _fresh_process(blocked) == (reference, True)
+    (tmp_path / "damaged").mkdir()
+    (tmp_path / "damaged" / "units.json").write_text("{not json")
+    assert _fresh_process(tmp_path / "damaged") == (reference, True)
