@@ -48,11 +48,12 @@ def test_curve_knots_are_breakpoints():
     assert all(min(abs(b - k) for b in breaks) < 1e-15 for k in knots)
 
 
-@pytest.mark.parametrize("seed", range(50))
+@pytest.mark.parametrize("seed", range(30))
 def test_random_tendon_robots_balance(seed):
-    """50 random robots with tendons on curves, helices and lines, slack (tension_only,
+    """30 random robots with tendons on curves, helices and lines, slack (tension_only,
     displacement-controlled) tendons, TCAs over partial spans and masses inside spans, on a
-    24-interval mesh: balance to 1e-8."""
+    24-interval mesh: balance to 1e-8. (50 until 2026-12-05, all passing; 30 keep the suite
+    within its time, with test_global_balance's and test_fuzz's random robots besides.)"""
     scenario = random_tendon_robot(seed)
     scenario["solver"] = {"intervals": 24, "refine": "off"}
     solution = Simulation.from_file(scenario).solve(warn=False)
