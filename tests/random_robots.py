@@ -187,12 +187,13 @@ def _full_length_tendon(rng, name, length, diameter, force):
     return dict(tendon, **({"stiffness": stiffness} if rng.random() < 0.5 else {"compliance": 1 / stiffness}))
 
 
-def ramped_dynamics(seed, integrator, obstacles=(), gravity=1.0):
+def ramped_dynamics(seed, integrator, obstacles=(), gravity=1.0, fraction=0.2, contact=None):
     """``(TimeSimulation, TimeSeries)`` of rod dynamics on :func:`random_robot` ``seed`` (no
     distributed loads: the energy account counts point loads' work), its actuators ramped over
-    the first 10 of 40 steps of a fifth of its shortest time scale (TCAs 15 degC hotter, tendons
-    pulled 30 % harder), every step's global balance checked; with ``obstacles`` (scenario
-    entries); ``gravity`` scales gravity over the same ramp (a lift's acceleration)."""
+    the first 2 of 8 of its shortest time scales (TCAs 15 degC hotter, tendons pulled 30 %
+    harder) in steps of ``fraction`` of it (0.2: 40 steps), every step's global balance checked;
+    with ``obstacles`` (scenario entries) and ``contact`` (the scenario's ``contact`` settings);
+    ``gravity`` scales gravity over the same ramp (a lift's acceleration)."""
     from tca_casadi import Simulation
     from tca_casadi.discretisation.dynamics import time_scale
     from tca_casadi.time_simulation.timeline import TimeSimulation
@@ -208,8 +209,12 @@ def ramped_dynamics(seed, integrator, obstacles=(), gravity=1.0):
                 changes[f"{key}.tension"] = 1.3 * actuator["tension"]
     if gravity != 1.0:
         changes["gravity"] = [float(gravity * g) for g in Simulation.from_file(scenario).scenario.gravity]
-    step = 0.2 * min(time_scale(m) for m in Simulation.from_file(scenario).robot.modules)
-    scenario.update(dynamics={"enabled": True, "integrator": integrator, "balance_every": 1}, duration=40 * step,
-                    timeline=[{"at": 0.0, "set": changes, "ramp": 10 * step}], obstacles=list(obstacles))
+    shortest = min(time_scale(m) for m in Simulation.from_file(scenario).robot.modules)
+    step = fraction * shortest
+    scenario.update(dynamics={"enabled": True, "integrator": integrator, "balance_every": 1},
+                    duration=round(8 / fraction) * step, timeline=[{"at": 0.0, "set": changes, "ramp": 2 * shortest}],
+                    obstacles=list(obstacles))
+    if contact is not None:
+        scenario["contact"] = dict(scenario.get("contact") or {}, **contact)
     timed = TimeSimulation(Simulation.from_file(scenario), dt=step)
     return timed, timed.run()

@@ -57,16 +57,17 @@ def test_contact_the_dynamics_does_not_model_is_refused_in_one_line(setting, say
 
 
 @pytest.mark.parametrize("seed", [3, 7])
-def test_random_robots_strike_a_ball_on_their_tips_path(seed):
-    """A ball placed halfway along the tip's largest excursion of the free run, its surface where
-    the tip's outline reaches then: the robot strikes it; every step balances globally with the
-    contact forces (1e-6, as without contact), no candidate cuts into the ball (1e-9 m), the
-    impact loss never decreases, and the energy account closes with the impacts as it does
-    without them: the contact forces' work and implicit Euler's loss over the impacts' steps
-    (``integrator_loss``, the forces at the steps' ends doing the work) account for them to 2e-5
-    of the energy in play (measured 1.0e-5, 6e-6: BDF2's steps while the contact stays closed
-    take or give 1e-8 J a step more than without it), what is left being BDF2's own
-    dissipation, as without contact (1e-4-2e-4)."""
+def test_random_robots_strike_a_ball_with_friction_and_keep_their_energy_account(seed):
+    """A ball with Coulomb friction 0.2 placed halfway along the tip's largest excursion of the
+    free run, its surface where the tip's outline reaches then: the robot strikes it and slides
+    over it. In steps of 1/40 of the robot's shortest time scale, the energy account closes to
+    1e-4 of the energy in play with the impacts and friction (kinetic + elastic + gravitational +
+    dissipated + friction work + impact loss + implicit Euler's loss at the impacts = work in;
+    measured 6.1e-5 and 2.8e-5); friction work and impact loss never decrease, and friction
+    work is positive (the tip slid); every step balances globally with the contact forces
+    (1e-6), no candidate cuts into the ball (1e-9 m) and every contact force is within the cone.
+    In steps of 1/5 the account is off by BDF2's own damping of the modes that step does not
+    resolve: 1.7e-4 without the ball and 1.6e-4 with it on seed 3 (docs/contact.md section 5a)."""
     from tca_casadi.model.contact import outline_size
     timed, free = ramped_dynamics(seed, "bdf2")
     tips = free.tip_positions()
@@ -75,18 +76,19 @@ def test_random_robots_strike_a_ball_on_their_tips_path(seed):
     direction = moved[k] / np.linalg.norm(moved[k])
     a = outline_size(timed.sim.robot.modules[timed.sim.robot.tip_index]) / 2
     radius = max(0.2 * np.linalg.norm(moved[k]), a)
-    ball = {"name": "ball", "shape": "sphere", "radius": float(radius),
+    ball = {"name": "ball", "shape": "sphere", "radius": float(radius), "friction": 0.2,
             "position": (tips[0] + 0.5 * moved[k] + direction * (radius + a)).tolist()}
-    timed_hit, hit = ramped_dynamics(seed, "bdf2", [ball])
+    timed_hit, hit = ramped_dynamics(seed, "bdf2", [ball], fraction=0.025, contact={"friction_law": "coulomb"})
     assert hit.completed, hit.message
-    free_balance = timed.report(free)["dynamics"]["energy_balance_relative"]
-    assert abs(timed_hit.report(hit)["dynamics"]["energy_balance_relative"] - free_balance) < 2e-5
-    assert free_balance < 1e-3
+    assert abs(timed_hit.report(hit)["dynamics"]["energy_balance_relative"]) < 1e-4
+    friction, loss = (hit.energies[:, ENERGY_COLUMNS.index(name)] for name in ("friction_work", "impact_loss"))
+    assert np.all(np.diff(friction) >= -1e-15) and np.all(np.diff(loss) >= -1e-15) and friction[-1] > 0
     assert max(view.contact_columns()["ball.normal_force [N]"] for view in hit.views) > 0
     assert max(hit.checked_balances()) < 1e-6
     assert min(float(np.min(view.contact_gaps)) for view in hit.views[1:]) > -1e-9
-    loss = hit.energies[:, ENERGY_COLUMNS.index("impact_loss")]
-    assert np.all(np.diff(loss) >= -1e-12)
+    for view in hit.views:
+        for contact in view.contacts or ():
+            assert np.linalg.norm(contact.tangential_force) <= 0.2 * contact.normal_force + 1e-9
     assert np.max(np.linalg.norm(hit.tip_positions() - tips[0], axis=1)) < np.linalg.norm(moved[k])   # stopped short
 
 
