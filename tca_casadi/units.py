@@ -42,12 +42,11 @@ class Conversions:
     the units here is affine: a factor, or an offset for degC and degF). A command whose units
     were all seen before then does not import pint (0.17 s of each process, dask's import
     included). pint remains the authority: a new pair is converted by pint, and is kept only if
-    the affine map reproduces pint's answer at the value asked and one more (1e-12 relative); a kept pair
-    is converted by its map from the first time on, so that a value does not depend on whether
-    the file existed. The file,
-    ``units.json`` in ``$TCA_CASADI_CACHE`` or ``~/.cache/tca_casadi``, records pint's version; a
-    different version starts it afresh. It is replaced atomically; where it cannot be written,
-    nothing is kept."""
+    the affine map reproduces pint's answer at the value asked and one more (1e-12 relative).
+    A kept pair is converted by its map from the first time on, so that a value does not depend
+    on whether the file existed. The file, ``units.json`` in ``$TCA_CASADI_CACHE`` or
+    ``~/.cache/tca_casadi``, records pint's version (another version starts it afresh) and is
+    replaced atomically; where it cannot be written, nothing is kept."""
 
     def __init__(self, path=None):
         self.path = Path(path) if path is not None else cache_root() / "units.json"
