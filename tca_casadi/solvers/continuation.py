@@ -384,13 +384,13 @@ class ArclengthFollower:
 
     def _lam_column(self, x):
         """``dg/dlam = J_P delta`` at ``x = (w, lam)``."""
-        return self.solver.square.parameter_jacobian(x[:-1], self.params_at(x[-1])) @ self.delta
+        return self.solver.square.parameter_rates(x[:-1], self.params_at(x[-1]), self.delta.reshape(-1, 1))[:, 0]
 
     def tangent(self, linear, previous):
         """Unit tangent of the branch at a point, oriented along ``previous``."""
         rhs = np.zeros(previous.size)
         rhs[-1] = 1.0
-        tangent = solve_bordered(linear.J_w, linear.J_P @ self.delta, previous, rhs)
+        tangent = solve_bordered(linear.J_w, linear.parameter_rates(self.delta), previous, rhs)
         if tangent is None:
             return previous
         return _normalise(tangent)

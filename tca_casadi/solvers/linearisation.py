@@ -75,12 +75,33 @@ def column_order(J, banded=None):
 class Linearisation:
     """``g``, ``J_w = dg/dw`` (sparse, square), ``J_P = dg/dP`` and ``T_w, T_P``: the derivatives
     of the tip position [m] at one point ``(w, P)``; ``factorise(J_w)``: the system's sparse LU
-    (an :class:`OrderedLU`; default in J_w's own column order)."""
+    (an :class:`OrderedLU`; default in J_w's own column order). ``J_P``: a sparse matrix, or a
+    function that makes it (on first use); ``rates``: ``directions (nP, k) -> dg/dP directions``
+    without it, used for up to :data:`~tca_casadi.solvers.newton.FORWARD_DIRECTIONS` directions."""
 
-    def __init__(self, g, J_w, J_P, T_w, T_P, factorise=None):
-        self.g, self.J_w, self.J_P, self.T_w, self.T_P = g, J_w.tocsc(), J_P.tocsc(), T_w, T_P
+    def __init__(self, g, J_w, J_P, T_w, T_P, factorise=None, rates=None):
+        self.g, self.J_w, self.T_w, self.T_P = g, J_w.tocsc(), T_w, T_P
+        self._J_P, self._make_J_P = (None, J_P) if callable(J_P) else (J_P.tocsc(), None)
+        self._rates = rates
         self._factorise = factorise
         self._lu = None
+
+    @property
+    def J_P(self):
+        """``dg/dP`` (sparse, (n, nP)), made once."""
+        if self._J_P is None:
+            self._J_P = self._make_J_P().tocsc()
+        return self._J_P
+
+    def parameter_rates(self, direction):
+        """``dg/dP direction`` (direction (nP,) or (nP, k); the result (n,) or (n, k))."""
+        from .newton import FORWARD_DIRECTIONS
+        direction = np.asarray(direction, float)
+        columns = direction.reshape(direction.shape[0], -1)
+        if self._rates is None or self._J_P is not None or columns.shape[1] > FORWARD_DIRECTIONS:
+            return np.asarray(self.J_P @ direction, float)
+        rates = self._rates(columns)
+        return rates[:, 0] if direction.ndim == 1 else rates
 
     @property
     def lu(self):
@@ -91,8 +112,7 @@ class Linearisation:
 
     def state_derivative(self, direction):
         """``dw/dlam`` for ``P = P0 + lam direction`` (direction: (nP,) or (nP, k))."""
-        rhs = -(self.J_P @ np.asarray(direction, float))
-        return self.lu.solve(np.asarray(rhs, float))
+        return self.lu.solve(-self.parameter_rates(direction))
 
     def tip_derivative(self, direction):
         """``d tip / d lam`` [m per unit of lam], shape (3,) or (3, k)."""

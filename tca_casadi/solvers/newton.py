@@ -36,6 +36,9 @@ NATIVE_CHORD_CONTRACTION = 0.3
 #: a semismooth Newton step taken without descent moves the rods' scaled states (positions in
 #: module lengths, strains) by at most this much (the forces and multipliers as far as it says)
 SEMISMOOTH_STEP = 0.5
+#: a linearisation takes ``dg/dP`` along up to this many directions by forward mode, and in full
+#: for more (:meth:`SquareSystem.linearise`)
+FORWARD_DIRECTIONS = 2
 #: semismooth Newton stops when this many iterations in a row have not brought the residual
 #: below its best so far: its steps go round (contacts sticking and sliding, closing and opening
 #: in turn; the caller tries a shorter step), where it used to spend all its iterations
@@ -204,16 +207,23 @@ class SquareSystem:
         return w, g, False
 
     # ------------------------------------------------------------------ sensitivities
-    def _sensitivity_function(self):
+    def _tip_function(self):
+        """``(w, P) -> (dtip/dw, dtip/dP)`` and their patterns, built once."""
         if self._sensitivity is None:
             nlp = self.nlp
             w, P = ca.SX.sym("w", nlp.w.numel()), ca.SX.sym("P", nlp.P.numel())
             tip = nlp.outputs.expand()(w, P)[1][0:3, -1]
             function = ca.Function("tip_sensitivity", [w, P], [ca.jacobian(tip, w), ca.jacobian(tip, P)])
-            by_parameters = _parameter_jacobian(nlp, self._residual_function, self._fast)
-            patterns = [by_parameters[1]] + [CscPattern(function.sparsity_out(k)) for k in range(2)]
-            self._sensitivity = (by_parameters[0], BufferedFunction(self._fast(function)), patterns)
+            self._sensitivity = (BufferedFunction(self._fast(function)),
+                                 [CscPattern(function.sparsity_out(k)) for k in range(2)])
         return self._sensitivity
+
+    def _parameter_jacobian_function(self):
+        """``(function (w, P) -> (g, nonzeros of dg/dP), CscPattern)``, built once, where the
+        full ``dg/dP`` is asked for."""
+        if getattr(self, "_by_parameters", None) is None:
+            self._by_parameters = _parameter_jacobian(self.nlp, self._residual_function, self._fast)
+        return self._by_parameters
 
     def _fast(self, function):
         """``function`` compiled (:mod:`.compiled`; code larger than
@@ -224,11 +234,10 @@ class SquareSystem:
         from .compiled import OPTIMISED_BYTES, compiled
         return compiled(function, optimised_bytes=OPTIMISED_BYTES)
 
-    def _sensitivities(self, w, P):
-        """``(dg/dP, dtip/dw, dtip/dP)`` as scipy sparse matrices (CSC)."""
-        by_parameters, tip, patterns = self._sensitivity_function()
-        values = [by_parameters(w, P)[1]] + list(tip(w, P))
-        return [pattern.matrix(v) for pattern, v in zip(patterns, values)]
+    def _tip_derivatives(self, w, P):
+        """``(dtip/dw, dtip/dP)`` as scipy sparse matrices (CSC)."""
+        tip, patterns = self._tip_function()
+        return [pattern.matrix(v) for pattern, v in zip(patterns, tip(w, P))]
 
     def state_derivative(self, w, P, directions):
         """``(dw/dlam (n, k), lu)`` for ``P = P0 + lam directions`` at ``(w, P)`` (directions
@@ -245,14 +254,16 @@ class SquareSystem:
         """``J_P directions`` (n, k) at ``(w, P)`` (directions (nP, k)), by CasADi's forward
         mode: k directional derivatives of the residual, about k residuals' cost."""
         k = directions.shape[1]
-        if getattr(self, "_directional", None) is None or self._directional[0] != k:
+        if getattr(self, "_directional", None) is None:
+            self._directional = {}
+        if k not in self._directional:                 # one Function per number of directions
             nlp = self.nlp
             w_sym, P_sym = ca.SX.sym("w", nlp.w.numel()), ca.SX.sym("P", nlp.P.numel())
             V = ca.SX.sym("V", nlp.P.numel(), k)
             g = self._residual_function(w_sym, P_sym)
-            self._directional = (k, BufferedFunction(self._fast(ca.Function("residual_by_P", [w_sym, P_sym, V],
-                                                                            [ca.jtimes(g, P_sym, V)]))))
-        rates = self._directional[1](w, P, directions.ravel(order="F"))[0]
+            self._directional[k] = BufferedFunction(self._fast(ca.Function("residual_by_P", [w_sym, P_sym, V],
+                                                                           [ca.jtimes(g, P_sym, V)])))
+        rates = self._directional[k](w, P, np.asarray(directions, float).ravel(order="F"))[0]
         return np.ascontiguousarray(rates.reshape(-1, k, order="F"))
 
     def predicted(self, w, P_from, P_to, lu):
@@ -271,14 +282,21 @@ class SquareSystem:
         return tangent if size < float(np.max(np.abs(self._residual(w, P_to)[0]))) else w
 
     def parameter_jacobian(self, w, P):
-        """``dg/dP`` (sparse, (n, nP)) at ``(w, P)``."""
-        return self._sensitivities(w, P)[0]
+        """``dg/dP`` (sparse, (n, nP)) at ``(w, P)``, in full."""
+        function, pattern = self._parameter_jacobian_function()
+        return pattern.matrix(function(w, P)[1])
 
     def linearise(self, w, P):
-        """:class:`Linearisation` at ``(w, P)``: adds ``dg/dP`` and the tip's derivatives."""
+        """:class:`Linearisation` at ``(w, P)``: adds the tip's derivatives, and ``dg/dP`` when
+        asked for: along up to :data:`FORWARD_DIRECTIONS` directions by CasADi's forward mode
+        (:meth:`parameter_rates`: a residual's cost a direction, where the full structured
+        ``dg/dP`` costs as much as ``J_w``; a path's tangent and a sweep's sensitivities), in full
+        for more (an inverse query's temperatures), evaluated once."""
         g, J_w = self.evaluate(w, P)
-        J_P, T_w, T_P = self._sensitivities(w, P)
-        return Linearisation(g, J_w, J_P, T_w, T_P.toarray(), factorise=self.factorise)
+        T_w, T_P = self._tip_derivatives(w, P)
+        w, P = np.array(w, float), np.array(P, float)
+        return Linearisation(g, J_w, lambda: self.parameter_jacobian(w, P), T_w, T_P.toarray(), factorise=self.factorise,
+                             rates=lambda directions: self.parameter_rates(w, P, directions))
 
 
 def _parameter_jacobian(nlp, residual, fast):

@@ -84,18 +84,25 @@ def test_newton_failure_falls_back_to_ipopt_and_is_reported():
 
 
 def test_state_derivative_by_forward_mode_equals_the_full_parameter_jacobian_s():
-    """``SquareSystem.state_derivative`` (``dg/dP`` only along the directions, by CasADi's forward
-    mode; what plans differentiate through) against the linearisation's full sparse ``dg/dP``, for
-    the three TCA temperatures of the bending module at a bent equilibrium: the same ``dw/dT`` to
-    1e-10 of its size, and against central differences of Newton solves to 1e-6 of it."""
+    """``SquareSystem.state_derivative`` and a linearisation's along up to two directions
+    (``dg/dP`` only along them, by CasADi's forward mode; what plans, sweeps and paths
+    differentiate through) against the full sparse ``dg/dP`` (the structured Jacobian, which a
+    linearisation uses for three directions), for the three TCA temperatures of the bending
+    module at a bent equilibrium: the same ``dw/dT`` to 1e-10 of its size, and against central
+    differences of Newton solves to 1e-6 of it."""
     sim = Simulation.from_file(SCENARIOS / "bending_module.yaml")
     solution = sim.solve(warn=False)
     solver, w, params = sim.solver("collocation"), solution.iterate.w, sim.params.copy()
     selector = np.zeros((params.size, 3))
     for j, key in enumerate(("bending.tca1", "bending.tca2", "bending.tca3")):
         selector[sim.robot.layout[f"{key}.temperature"].start, j] = 1.0
-    fast, _ = solver.square.state_derivative(w, params, selector)
-    full = solver.linearise(w, params).state_derivative(selector)
+    fast, lu = solver.square.state_derivative(w, params, selector)
+    linear = solver.linearise(w, params)
+    assert_allclose(linear.state_derivative(selector[:, 1]), fast[:, 1], rtol=0, atol=1e-10 * np.max(np.abs(fast)))
+    assert_allclose(linear.state_derivative(selector[:, :2]), fast[:, :2], rtol=0, atol=1e-10 * np.max(np.abs(fast)))
+    assert linear._J_P is None                                 # forward mode so far: no full dg/dP
+    full = linear.state_derivative(selector)                   # three directions: the full dg/dP
+    assert linear._J_P is not None
     size = np.max(np.abs(full))
     assert_allclose(fast, full, rtol=0, atol=1e-10 * size)
     step = 1e-3                                              # K
