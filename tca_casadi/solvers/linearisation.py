@@ -7,6 +7,9 @@ Jacobian's determinant and its smallest singular value, which show folds).
 import numpy as np
 import scipy.sparse.linalg as spla
 
+#: a linearisation takes ``dg/dP`` along up to this many directions by forward mode, and in full
+#: for more (:meth:`~tca_casadi.solvers.newton.SquareSystem.linearise`)
+FORWARD_DIRECTIONS = 2
 #: COLAMD's column order is used when its LU fill is below this fraction of the natural order's
 COLAMD_FILL = 0.5
 #: parities of column orders in use: id -> (order, parity) (:attr:`OrderedLU.order_parity`)
@@ -77,7 +80,7 @@ class Linearisation:
     of the tip position [m] at one point ``(w, P)``; ``factorise(J_w)``: the system's sparse LU
     (an :class:`OrderedLU`; default in J_w's own column order). ``J_P``: a sparse matrix, or a
     function that makes it (on first use); ``rates``: ``directions (nP, k) -> dg/dP directions``
-    without it, used for up to :data:`~tca_casadi.solvers.newton.FORWARD_DIRECTIONS` directions."""
+    without it, used for up to :data:`FORWARD_DIRECTIONS` directions."""
 
     def __init__(self, g, J_w, J_P, T_w, T_P, factorise=None, rates=None):
         self.g, self.J_w, self.T_w, self.T_P = g, J_w.tocsc(), T_w, T_P
@@ -95,7 +98,6 @@ class Linearisation:
 
     def parameter_rates(self, direction):
         """``dg/dP direction`` (direction (nP,) or (nP, k); the result (n,) or (n, k))."""
-        from .newton import FORWARD_DIRECTIONS
         direction = np.asarray(direction, float)
         columns = direction.reshape(direction.shape[0], -1)
         if self._rates is None or self._J_P is not None or columns.shape[1] > FORWARD_DIRECTIONS:

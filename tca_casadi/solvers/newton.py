@@ -36,9 +36,6 @@ NATIVE_CHORD_CONTRACTION = 0.3
 #: a semismooth Newton step taken without descent moves the rods' scaled states (positions in
 #: module lengths, strains) by at most this much (the forces and multipliers as far as it says)
 SEMISMOOTH_STEP = 0.5
-#: a linearisation takes ``dg/dP`` along up to this many directions by forward mode, and in full
-#: for more (:meth:`SquareSystem.linearise`)
-FORWARD_DIRECTIONS = 2
 #: semismooth Newton stops when this many iterations in a row have not brought the residual
 #: below its best so far: its steps go round (contacts sticking and sliding, closing and opening
 #: in turn; the caller tries a shorter step), where it used to spend all its iterations
@@ -288,7 +285,7 @@ class SquareSystem:
 
     def linearise(self, w, P):
         """:class:`Linearisation` at ``(w, P)``: adds the tip's derivatives, and ``dg/dP`` when
-        asked for: along up to :data:`FORWARD_DIRECTIONS` directions by CasADi's forward mode
+        asked for: along up to :data:`~tca_casadi.solvers.linearisation.FORWARD_DIRECTIONS` directions by CasADi's forward mode
         (:meth:`parameter_rates`: a residual's cost a direction, where the full structured
         ``dg/dP`` costs as much as ``J_w``; a path's tangent and a sweep's sensitivities), in full
         for more (an inverse query's temperatures), evaluated once."""
