@@ -26,6 +26,8 @@ log = logging.getLogger(__name__)
 FINE_SAMPLES = 16
 #: built solvers kept for reuse, by (scenario name, structure key, meshes, degree); the oldest go
 BUILT_SOLVERS = 6
+#: semismooth Newton's iterations where the monotone one found no descent (with contact)
+SEMISMOOTH_ITERATIONS = 40
 _built = OrderedDict()
 
 
@@ -199,15 +201,30 @@ class CollocationSolver:
         """:class:`Linearisation` of the square system at scaled variables ``w`` and ``params``."""
         return self.square.linearise(w, params)
 
-    def solve_newton(self, params, w0, lu=None, search=True, balance=True):
+    def solve_newton(self, params, w0, lu=None, search=True, balance=True, semismooth=False):
         """Newton's method on the square system from scaled variables ``w0`` (a predictor):
         the same equations and tolerance as :meth:`solve`, without IPOPT's machinery (``lu``: a
         factorised Jacobian from a nearby point for the first chord steps; ``search`` and
-        ``balance``: as in :meth:`evaluate`)."""
+        ``balance``: as in :meth:`evaluate`). ``semismooth``: where the line search finds no
+        descent on a robot with contact, semismooth Newton from ``w0`` is tried next
+        (:data:`SEMISMOOTH_ITERATIONS`; where the alternative is IPOPT, not a shorter step)."""
         params = np.asarray(params, dtype=float)
         w, status = self.square.newton(w0, params, self.options.tolerance, lu=lu)
+        if semismooth and status.status == Status.NO_DESCENT and self._complementarity:
+            # a contact closing or opening: the complementarity's kink defeats the line search,
+            # where semismooth Newton (the capped step taken without descent) goes through it
+            again, again_status = self.square.newton(w0, params, self.options.tolerance, SEMISMOOTH_ITERATIONS,
+                                                     monotone=False)
+            if again_status.success:
+                w, status = again, again_status.noted("semismooth: the line search found no descent at a kink")
         self.solve_count += 1
         return self.evaluate(w, params, status, search, balance)
+
+    @property
+    def _complementarity(self):
+        """Whether the equations hold complementarity conditions (obstacles, objects' grips and
+        supports), whose kinks a line search cannot pass."""
+        return bool(self.robot.obstacles) or bool(self.robot.bodies)
 
     def evaluate(self, w, params, status, search=True, balance=True):
         """A :class:`Solution` from scaled variables ``w`` found by some algorithm (Newton, the

@@ -49,7 +49,7 @@ def localise(strategy, solver, solution, params):
         candidate = CollocationSolver.shared(moved, scenario.solver, moved.structure_key(scenario), meshes,
                                              solver.degree)
         w0 = accuracy.interpolate(solver.nlp, solution.iterate.w, candidate.nlp, params)
-        trial = candidate.solve_newton(params, w0)
+        trial = candidate.solve_newton(params, w0, semismooth=True)
         if not trial.converged:
             trial = candidate.solve_ipopt(params, _warm(trial, w0))
         if not trial.converged:            # a contact far from the last one: from the reference state

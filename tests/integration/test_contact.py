@@ -70,6 +70,24 @@ def test_propped_cantilever_reactions_are_three_and_five_eighths_of_the_weight(y
     assert solution.balance.relative < 1e-9
 
 
+def test_a_localised_candidate_beside_a_closed_one_is_solved_by_semismooth_newton(monkeypatch):
+    """On the soft (2 GPa) propped cantilever, localisation adds a candidate 6 um before the tip
+    on the knife edge; which of the two carries the prop is a complementarity kink where the
+    line search finds no descent. Semismooth Newton passes it (IPOPT, which took 200 iterations
+    and failed there, then continuation from rest, is not called), to the same reaction."""
+    from tca_casadi.solvers.collocation import CollocationSolver
+
+    def no_ipopt(self, params, initial=None):
+        raise AssertionError("IPOPT was called")
+    monkeypatch.setattr(CollocationSolver, "solve_ipopt", no_ipopt)
+    sim, solution = solve(propped("2 GPa"))
+    assert solution.converged and "semismooth" in solution.message
+    assert len(sim.robot.added_contacts.get(0, ())) == 1
+    weight = sim.robot.modules[0].weight_density * 9.81 * 0.1
+    assert_allclose(sum(c.normal_force for c in solution.contacts) / weight, 3 / 8, rtol=1e-3, atol=0)
+    assert solution.balance.relative < 1e-9
+
+
 def test_propped_cantilever_converges_to_beam_theory_as_the_rod_stiffens():
     """Against the shear-deformable (Timoshenko) small-deflection reaction
     ``3/8 w L (1 + 4 phi) / (1 + 3 phi)``, ``phi = EI / (GA L^2)`` (6.5e-5 here; the rod shears
