@@ -10,7 +10,6 @@ exactly where it is scheduled.
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 
 @dataclass(frozen=True)
@@ -197,6 +196,7 @@ def integrate(laws, drives, ambient, initial, outputs, coupling=None, rtol=1e-11
             return np.concatenate([(power - lost - exchanged) / capacity, power, lost, rate, exchanged])
         return rhs
 
+    from scipy.integrate import solve_ivp          # here: a run without heating never imports it (0.1 s)
     cuts = sorted({b for d in drives for b in d.schedule.breakpoints if outputs[0] < b < outputs[-1]})
     edges = [outputs[0], *cuts, outputs[-1]]
     initial = np.asarray(initial, float).reshape(count, -1)          # (count,) T or (count, 2) T and I
