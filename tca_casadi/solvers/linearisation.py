@@ -25,6 +25,14 @@ class OrderedLU:
         self.order = order
         self.factors = spla.splu(J if order is None else J[:, order].tocsc(), permc_spec="NATURAL")
 
+    @classmethod
+    def of_ordered(cls, ordered, order):
+        """The LU of ``J`` given ``ordered = J[:, order]`` (CSC) itself."""
+        lu = cls.__new__(cls)
+        lu.order = order
+        lu.factors = spla.splu(ordered, permc_spec="NATURAL")
+        return lu
+
     def solve(self, b, trans="N"):
         if self.order is None:
             return self.factors.solve(b, trans=trans)
