@@ -16,6 +16,7 @@ from .model import Robot
 from .scenario import load_scenario
 from .scenario.loader import validate
 from .scenario.overrides import apply_overrides
+from .solvers.outputs import StepOutputs
 from .solvers.strategy import SolveStrategy
 
 log = logging.getLogger(__name__)
@@ -121,7 +122,7 @@ class Simulation:
                 warnings.warn(warning, stacklevel=2)
         return solution
 
-    def solve_near(self, previous=None, params=None):
+    def solve_near(self, previous=None, params=None, lean=False):
         """The equilibrium at ``params`` (a parameter vector; None: the current parameters),
         for one of many nearby points (a study); parameters that the robot cannot take (an
         actuator's temperature out of its law's range, an obstacle cutting the reference
@@ -130,9 +131,13 @@ class Simulation:
         without a square system), continuation from the reference state when there is none,
         or when Newton fails or leaves a TCA pushing. Newton's first steps are chord steps on
         the Jacobian factorised last (at or near ``previous``). No error estimate, no
-        refinement, no warnings issued (they are in ``solution.warnings``)."""
-        solution, self.params = self.strategy.solve_near(self.params if params is None else params, previous)
-        self.last = solution
+        refinement, no warnings issued (they are in ``solution.warnings``). ``lean``: where
+        Newton converges on a robot without contact or friction, the answer is the sample's
+        :class:`~tca_casadi.solvers.outputs.StepOutputs` (tip, actuators, status; no global
+        balance, no warnings), not a Solution: a study builds Solutions on a schedule."""
+        solution, self.params = self.strategy.solve_near(self.params if params is None else params, previous, lean)
+        if not isinstance(solution, StepOutputs):        # a sample's outputs are no warm start for solve()
+            self.last = solution
         return solution
 
     def solve_at(self, params, method=None, estimate=True):

@@ -41,6 +41,10 @@ class ModuleResult:
     def tip_rotation(self):
         return self.R[:, :, -1]
 
+    @property
+    def base_rotation(self):
+        return self.R[:, :, 0]
+
 
 @dataclass
 class ActuatorResult:
@@ -301,6 +305,36 @@ class BodyResult:
                 "residual_force": self.residual_force.tolist(), "residual_moment": self.residual_moment.tolist()}
 
 
+class ReadsItsStatus:
+    """``status``, ``message``, ``max_residual``, ``iterations`` and the timings of a result
+    read from its ``result`` (:class:`~tca_casadi.status.SolveStatus`)."""
+
+    @property
+    def status(self):
+        """The integer :class:`~tca_casadi.status.Status`."""
+        return self.result.status
+
+    @property
+    def message(self):
+        return self.result.message
+
+    @property
+    def max_residual(self):
+        return self.result.residual
+
+    @property
+    def iterations(self):
+        return self.result.nit
+
+    @property
+    def solve_time_s(self):
+        return self.result.solve_time_s
+
+    @property
+    def build_time_s(self):
+        return self.result.build_time_s
+
+
 class TipOfModules:
     """The tip of a result with ``modules`` (each with ``tip_position`` and ``tip_rotation``)
     and the index ``tip_module`` of the tip's module."""
@@ -346,7 +380,7 @@ class Iterate:
 
 
 @dataclass(repr=False)
-class Solution(TipOfModules, ResultAPI):
+class Solution(TipOfModules, ReadsItsStatus, ResultAPI):
     """An equilibrium (or a failed attempt: ``converged`` is False, never hidden).
 
     ``result`` (:class:`~tca_casadi.status.SolveStatus`) says how the solve ended; ``converged``,
@@ -382,31 +416,6 @@ class Solution(TipOfModules, ResultAPI):
         """``robot.png``'s figure: the robot drawn in 3D."""
         from .plotting import save_robot_png
         return save_robot_png(self, None)
-
-    @property
-    def status(self):
-        """The integer :class:`~tca_casadi.status.Status`."""
-        return self.result.status
-
-    @property
-    def message(self):
-        return self.result.message
-
-    @property
-    def max_residual(self):
-        return self.result.residual
-
-    @property
-    def iterations(self):
-        return self.result.nit
-
-    @property
-    def solve_time_s(self):
-        return self.result.solve_time_s
-
-    @property
-    def build_time_s(self):
-        return self.result.build_time_s
 
     def warning_texts(self, kind=None):
         """The warnings' texts (of one ``kind`` if given)."""

@@ -12,12 +12,14 @@ from ..discretisation.structure import StructuredJacobian
 from ..errors import PhysicsWarning
 from ..status import SolveStatus, Status
 from . import accuracy
+from ..model.balance import load_markers
 from ..model.contact import gaps, outline_of
 from ..solution import Iterate
 from .assemble import build_solution
 from .guess import reference_guess
 from ..buffers import BufferedFunction
 from .newton import MEMORY_ADVICE, SquareSystem
+from .outputs import ActuatorState, Centreline, StepOutputs
 
 log = logging.getLogger(__name__)
 
@@ -305,6 +307,35 @@ class CollocationSolver:
     def _body_inertias(self, w, params):
         """Per free body its d'Alembert force and moment (none in statics)."""
         return None
+
+    def outputs(self, w, params):
+        """The :class:`~tca_casadi.solvers.outputs.StepOutputs` at scaled ``w`` and the
+        parameter vector ``params``: the centrelines (nodes and tip), the actuators' tensions,
+        lengths and strokes and the point loads' markers, without a Solution (no global balance,
+        no warnings, no search between nodes): what a dynamic run keeps of a step and a study of
+        a sample between their balance checks."""
+        nlp, robot = self.nlp, self.robot
+        lengths, ends, _ = self._outputs_at(w, params)
+        w_phys = np.asarray(w, float) * nlp.scale
+        modules = []
+        for m, (index, s, weights) in enumerate(self._node_layout()):
+            pose = np.hstack([w_phys[index[0:7]], ends[0:7, m:m + 1]]) + nlp.state_offset[m][0:7, None]
+            modules.append(Centreline(s, pose[0:3], pose[3:7], weights))
+        robot_params = params[:robot.layout.size]
+        tensions, lengths = self._tensions(w_phys, params), lengths.ravel()
+        references = self._reference_lengths(robot_params)
+        actuators = {a.key: ActuatorState(float(tensions[k]), float(lengths[k]), float(lengths[k]) - references[k])
+                     for k, a in enumerate(robot.actuators)}
+        return StepOutputs(np.array(robot_params, float), modules, actuators,
+                           load_markers(robot, modules, robot_params) if robot.point_loads else [], robot.tip_index,
+                           parameter_names=dict(robot.layout.slices))
+
+    def _reference_lengths(self, robot_params):
+        """The actuators' reference lengths [m] at ``robot_params`` (the last set kept)."""
+        key = np.asarray(robot_params, float).tobytes()
+        if getattr(self, "_references", (None,))[0] != key:
+            self._references = (key, [a.reference_length for a in self.robot.at(robot_params).actuators])
+        return self._references[1]
 
     def _tensions(self, w_phys, params):
         """Every actuator's tension [N] (``robot.actuators`` order): an unknown's from the

@@ -16,7 +16,6 @@ import numpy as np
 
 from ..discretisation.dynamics import DynamicCollocationNLP
 from ..errors import ModelError
-from ..model.balance import load_markers
 from ..model.bodies import (CONTACT_UNKNOWNS, body_motion, body_pose, body_rotation, body_shape, box_moments,
                              inertial_wrench, kinetic_energy)
 from ..model.contact import CLOSED, gaps, outline_of, outline_size
@@ -24,7 +23,6 @@ from ..model.history import carried_history
 from ..model.dynamics import (elastic_energy_density, inertia_per_length, inertial_loads, kinetic_energy_density,
                               point_inertia, point_mass_of)
 from ..model.rotations import rotation_numpy, rotations_of
-from ..solution import TipOfModules, body_columns
 from .collocation import CollocationSolver
 from .compiled import has_compiler
 from .integrators import ImplicitEuler, integrator_named
@@ -96,30 +94,19 @@ class DynamicSolver(CollocationSolver):
         return out
 
     def outputs(self, w, params):
-        """The :class:`StepOutputs` at scaled ``w`` and the step's parameter vector ``params``:
-        the centrelines, actuators and point loads of a step, without its Solution."""
-        nlp, robot = self.nlp, self.robot
-        lengths, ends, _ = self._outputs_at(w, params)
-        w_phys = np.asarray(w, float) * nlp.scale
-        modules = []
-        for m, (index, s, weights) in enumerate(self._node_layout()):
-            pose = np.hstack([w_phys[index[0:7]], ends[0:7, m:m + 1]]) + nlp.state_offset[m][0:7, None]
-            modules.append(Centreline(s, pose[0:3], pose[3:7], weights))
-        robot_params = params[:robot.layout.size]
-        tensions, lengths = self._tensions(w_phys, params), lengths.ravel()
-        references = self._reference_lengths(robot_params)
-        actuators = {a.key: ActuatorState(float(tensions[k]), float(lengths[k]), float(lengths[k]) - references[k])
-                     for k, a in enumerate(robot.actuators)}
-        out = StepOutputs(np.array(robot_params, float), modules, actuators,
-                          load_markers(robot, modules, robot_params) if robot.point_loads else [], robot.tip_index,
-                          parameter_names=dict(robot.layout.slices))
+        """The :class:`~tca_casadi.solvers.outputs.StepOutputs` at scaled ``w`` and the step's parameter vector ``params``
+        (:meth:`CollocationSolver.outputs`), with the contacts' and grips' forces and gaps."""
+        out = super().outputs(w, params)
+        robot, nlp = self.robot, self.nlp
+        if robot.obstacles or robot.grips:
+            w_phys = np.asarray(w, float) * nlp.scale
         if robot.obstacles:
             out.contact_forces = np.asarray(w_phys[nlp.contact_index], float).ravel()
             out.obstacles = [c.obstacle for c in robot.contacts]
-            out.contact_gaps, out.clearance = self._gaps(robot.at(robot_params).obstacles, modules)
+            out.contact_gaps, out.clearance = self._gaps(robot.at(out.parameters).obstacles, out.modules)
         if robot.grips:
             out.grip_forces = np.array([w_phys[index[0]] for index in nlp.grip_index], float)
-            out.grip_gaps = self._grip_gaps(w_phys, modules)
+            out.grip_gaps = self._grip_gaps(w_phys, out.modules)
         return out
 
     def _grip_gaps(self, w_phys, modules):
@@ -161,13 +148,6 @@ class DynamicSolver(CollocationSolver):
         nearest = {shape.name: float(min(per_node[k, m].min() for m in range(len(modules))))
                    for k, shape in enumerate(shapes)}
         return at_candidates, nearest
-
-    def _reference_lengths(self, robot_params):
-        """The actuators' reference lengths [m] at ``robot_params`` (the last set kept)."""
-        key = np.asarray(robot_params, float).tobytes()
-        if getattr(self, "_references", (None,))[0] != key:
-            self._references = (key, [a.reference_length for a in self.robot.at(robot_params).actuators])
-        return self._references[1]
 
     def _extra_loads(self, w, params, module_data):
         """The sections' inertial forces and moments at the nodes (global frame, times the
@@ -261,87 +241,6 @@ def _check_contact(robot, integrator):
     if robot.obstacles and integrator.at_midpoint:
         raise ModelError("dynamics.integrator: midpoint with obstacles: its end state is extrapolated past the "
                             "contact solved at the step's middle; use bdf2")
-
-
-@dataclass
-class Centreline:
-    """A module's centreline at a step's nodes, its tip appended: arc lengths ``s`` (n,) [m],
-    positions ``p`` (3, n) [m], unit quaternions ``h`` (4, n), quadrature weights (n,) [m];
-    the rotations ``R`` (3, 3, n) computed when first read."""
-    s: np.ndarray
-    p: np.ndarray
-    h: np.ndarray
-    weights: np.ndarray
-
-    @functools.cached_property
-    def R(self):
-        return rotations_of(self.h)
-
-    @property
-    def tip_position(self):
-        return self.p[:, -1]
-
-    @property
-    def tip_rotation(self):
-        return self.R[:, :, -1] if "R" in self.__dict__ else rotation_numpy(self.h[:, -1])
-
-
-@dataclass
-class ActuatorState:
-    """An actuator's tension [N], length and stroke [m] at a step."""
-    tension: float
-    length: float
-    stroke: float
-
-
-@dataclass
-class StepOutputs(TipOfModules):
-    """What a dynamic run keeps of each step in place of its :class:`Solution` (built only when
-    asked, issue 36): the robot parameters, per module its :class:`Centreline`, per actuator
-    key its :class:`ActuatorState`, the point loads' markers (as ``Solution.loads``) and the
-    index of the tip's module. Read like a Solution by the energy account, the tables and the
-    objects' tracking."""
-    parameters: np.ndarray
-    modules: list
-    actuators: dict
-    loads: list
-    tip_module: int
-    converged: bool = True
-    #: the parameters' slices by name (as a Solution's); the free bodies' BodyResult s (with
-    #: free bodies: each step's, from its Solution)
-    parameter_names: dict = field(default_factory=dict)
-    bodies: list = field(default_factory=list)
-    #: with obstacles: the normal force [N] and the gap [m] at each contact candidate
-    #: (``robot.contacts``), and per obstacle the nearest approach over the nodes [m]
-    contact_forces: np.ndarray = None
-    contact_gaps: np.ndarray = None
-    clearance: dict = field(default_factory=dict)
-    obstacles: list = field(default_factory=list)
-    #: with friction: the closed contacts (ContactResult s, as a Solution's)
-    contacts: list = None
-    #: with free bodies: the normal force [N] and the gap [m] of each grip candidate
-    #: (``robot.grips``), and per body its pose, velocity [m/s] and body-frame angular velocity
-    #: [rad/s] (12, bodies) (:meth:`DynamicSolver.body_values`)
-    grip_forces: np.ndarray = None
-    grip_gaps: np.ndarray = None
-    body_motion: np.ndarray = None
-
-    def contact_columns(self):
-        """Per obstacle ``{"NAME.normal_force [N]", "NAME.clearance [m]"}`` (as a Solution's;
-        the clearance here is the nearest node's, not searched between nodes); per free body its
-        :func:`~tca_casadi.solution.body_columns` and velocity ``NAME.vx|vy|vz [m/s]``."""
-        out = {}
-        for k, name in enumerate(self.clearance):
-            out[f"{name}.normal_force [N]"] = float(sum(f for f, c in zip(self.contact_forces, self.obstacles) if c == k))
-            out[f"{name}.clearance [m]"] = self.clearance[name]
-        out.update(body_columns(self.bodies))
-        for body, motion in zip(self.bodies, () if self.body_motion is None else self.body_motion.T):
-            out.update({f"{body.name}.v{axis} [m/s]": float(v) for axis, v in zip("xyz", motion[6:9])})
-        return out
-
-    def body_velocity(self, k=0):
-        """The velocity [m/s] (3,) of free body ``k`` (``robot.bodies`` order)."""
-        return self.body_motion[6:9, k]
 
 
 @dataclass
@@ -605,7 +504,7 @@ class RodDynamics:
         return state.solution
 
     def outputs(self, state):
-        """The :class:`StepOutputs` of the end of the step that reached ``state`` (the start:
+        """The :class:`~tca_casadi.solvers.outputs.StepOutputs` of the end of the step that reached ``state`` (the start:
         the state at rest, at its parameters; with friction, its closed contacts too)."""
         out = self._outputs(state)
         if self.robot.path_dependent:
@@ -624,7 +523,7 @@ class RodDynamics:
         return out
 
     def solved_outputs(self, state):
-        """The :class:`StepOutputs` of the point the step was solved at (the midpoint rule's
+        """The :class:`~tca_casadi.solvers.outputs.StepOutputs` of the point the step was solved at (the midpoint rule's
         midpoint; else the end)."""
         return self.solver.outputs(state.solved, state.full)
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..errors import ScenarioError, TcaError, flag
 from ..model.history import carried_history, history_names_of
+from ..solution import Iterate
 from ..status import SolveStatus, Status
 from . import accuracy
 from .assemble import record_slides
@@ -107,12 +108,15 @@ class SolveStrategy:
         record_slides(self.robot, start, solution)
         return solution, params
 
-    def solve_near(self, params, previous=None):
+    def solve_near(self, params, previous=None, lean=False):
         """The equilibrium at ``params`` for one of many nearby points (a study; see
         :meth:`Simulation.solve_near <tca_casadi.simulation.Simulation.solve_near>`): Newton from
         ``previous``, continuation from the reference state when there is none or Newton fails
         or leaves a TCA pushing. Parameters the robot cannot take raise a
-        :class:`~tca_casadi.errors.TcaError` naming each problem. ``(solution, params)``."""
+        :class:`~tca_casadi.errors.TcaError` naming each problem. ``lean``: where Newton
+        converges on a robot without contact or friction, the answer is its
+        :class:`~tca_casadi.solvers.outputs.StepOutputs` (:func:`lean_enough`), not a Solution.
+        ``(solution, params)``."""
         problems = self.robot.problems(params)
         if problems:
             raise TcaError("; ".join(problems))
@@ -123,7 +127,17 @@ class SolveStrategy:
             lu, start = solver.square.last_lu, solver.initial_guess(params, previous)
             if start is previous.iterate.w:          # the tangent from the previous point, on its factors
                 start = solver.square.predicted(start, previous.parameters, params, lu)
-            solution = solver.solve_newton(params, start, lu=lu)
+            if lean and lean_enough(self.robot):
+                w, status = solver.square.newton(start, params, solver.options.tolerance, lu=lu)
+                solver.solve_count += 1
+                if status.success:
+                    outputs = solver.outputs(w, params)
+                    if not _pushing(self.robot, outputs.actuators):
+                        outputs.result, outputs.iterate = status, Iterate(solver.method, w=np.asarray(w, float))
+                        return outputs, params
+                solution = solver.evaluate(w, params, status)
+            else:
+                solution = solver.solve_newton(params, start, lu=lu)
         elif previous is not None:
             solution = solver.solve(params, previous)
         if solution is None or _needs_continuation(solution):
@@ -278,6 +292,19 @@ def _warm_steps(solver, rest, target, solution, first_step, min_step):
 def _needs_continuation(solution):
     return (not solution.converged) or any(
         a.kind != "tendon" and not a.tension_only and a.tension < 0 for a in solution.actuators.values())
+
+
+def _pushing(robot, actuators):
+    """Whether a muscle that only pulls pushes in ``actuators`` ({key: state with a ``tension``}):
+    :func:`_needs_continuation`'s test on a robot's actuators."""
+    return any(a.kind != "tendon" and not a.tension_only and actuators[a.key].tension < 0 for a in robot.actuators)
+
+
+def lean_enough(robot):
+    """Whether a sample of ``robot`` may be answered by its outputs without a Solution
+    (:meth:`SolveStrategy.solve_near`): no obstacles, objects or friction, whose contacts and
+    history only a Solution carries."""
+    return not robot.obstacles and not robot.bodies and not robot.path_dependent
 
 
 def _better(first, second):

@@ -298,7 +298,7 @@ def follow_dynamics(sim, series, path, progress=None, initial=None, start=None):
     up to there, when even that fails). The global balance is checked at the first step, every
     ``dynamics.balance_every`` steps and the last: those steps' Solutions are built as the run
     goes, the others' only when asked (:class:`StepSolutions`; ``series.views`` holds every
-    output's :class:`~tca_casadi.solvers.dynamics.StepOutputs`). Adds ``series.tip_velocities``
+    output's :class:`~tca_casadi.solvers.outputs.StepOutputs`). Adds ``series.tip_velocities``
     (n, 3) [m/s] and ``series.energies`` (n, 10) [J] (:data:`ENERGY_COLUMNS`)."""
     config = sim.scenario.dynamics
     first = start if start is not None else _static_start(sim, path[0] if initial is None else initial)

@@ -111,7 +111,8 @@ def test_a_killed_pool_process_loses_no_sample(scenarios):
     assert result.frame["worker"].nunique() >= 3            # the pool was started again
     serial = _study(scenarios, 160).run()
     assert_allclose(result.frame[TIP].to_numpy(float), serial.frame[TIP].to_numpy(float), rtol=0, atol=1e-9)
-    assert np.all(result.frame["balance [-]"] < 1e-9)
+    checked = result.frame["balance [-]"].dropna()          # every 25th sample of a chunk and its last
+    assert len(checked) >= 2 and np.all(checked < 1e-9)
 
 
 def test_cli_on_the_cluster(scenarios, cluster, tmp_path, capsys):

@@ -17,6 +17,7 @@ import numpy as np
 
 from ...results import ResultAPI, status_of
 from ...output import atomic_path, write_json
+from .worker import BALANCE_EVERY
 
 TIP = ["tip_x [m]", "tip_y [m]", "tip_z [m]"]
 #: the columns that come first, in this order
@@ -49,13 +50,16 @@ class StudyResult(ResultAPI):
             middle = [c for c in frame.columns if c not in LEADING + labels + TRAILING]
             frame = frame[LEADING + labels + middle + [c for c in TRAILING if c in frame.columns]]
         converged = int(frame["converged"].sum()) if len(frame) else 0
+        checked = frame.loc[frame["converged"], "balance [-]"].dropna() if len(frame) else frame
         wall = run_info["wall_time_s"]
         solved = len(frame) - run_info.get("resumed_samples", 0)
         info = {"scenario": study.sim.scenario.name, "samples": len(frame), "converged": converged,
                 "failed": len(frame) - converged, "design": study.design.kind, "seed": study.seed,
                 "varied": [a.describe() for a in study.axes], "structural_paths": study.structural,
                 "structure_groups": len(study.groups()), "outputs": study.outputs,
-                "samples_per_second": solved / wall if wall > 0 else None, **run_info,
+                "samples_per_second": solved / wall if wall > 0 else None,
+                "balance_checked": len(checked), "balance_worst": float(checked.max()) if len(checked) else None,
+                **run_info,
                 "finished": datetime.now(timezone.utc).isoformat(timespec="seconds")}
         result = cls(frame, info, labels, study)
         result._stream = stream
@@ -152,6 +156,11 @@ class StudyResult(ResultAPI):
                 mean, std = tips.mean(axis=0) * 1e3, tips.std(axis=0, ddof=1) * 1e3 if len(tips) > 1 else np.zeros(3)
                 lines.append("  tip mean +- std [mm]: " + ", ".join(f"{a} {m:.3f} +- {s:.3f}"
                                                                     for a, m, s in zip("xyz", mean, std)))
+        if info.get("balance_checked") is not None and info["converged"]:
+            worst = info["balance_worst"]
+            lines.append(f"  global balance checked at {info['balance_checked']} of {info['converged']} converged samples "
+                         f"(every {BALANCE_EVERY}th of a chunk and its last)"
+                         + (f": worst {worst:.1e} of the forces in play" if worst is not None else ""))
         failed = self.frame[~self.frame["converged"]] if len(self.frame) else self.frame
         for _, row in failed.head(3).iterrows():
             lines.append(f"  failed: sample {row['sample']}: {row['status']}: {str(row['message'])[:160]}")

@@ -1,4 +1,5 @@
 """The result of a sweep: the accepted points, the events along the branch, a CSV table."""
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -120,9 +121,8 @@ class SweepResult(ResultAPI):
 
 def bending_angle(solution):
     """Angle [rad] between the base tangent (first module) and the tip tangent."""
-    base = solution.modules[0].R[:, 2, 0]
-    tip = solution.tip_rotation[:, 2]
-    return float(np.arctan2(np.linalg.norm(np.cross(base, tip)), base @ tip))
+    (a1, a2, a3), (b1, b2, b3) = solution.modules[0].base_rotation[:, 2].tolist(), solution.tip_rotation[:, 2].tolist()
+    return math.atan2(math.hypot(a2 * b3 - a3 * b2, a3 * b1 - a1 * b3, a1 * b2 - a2 * b1), a1 * b1 + a2 * b2 + a3 * b3)
 
 
 def _format(value):
