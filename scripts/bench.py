@@ -375,17 +375,18 @@ def print_control(rates):
                   f"max {r['solve_time_max_s'] * 1e3:.0f} ms ({r['solve_time_fraction_of_period']:.0%} of the period)")
 
 
-def study_rates(per_axis, design_per_length):
+def study_rates(per_axis, design_per_length, overrides=()):
     """Samples per second of ``tca-casadi study`` on the bending module: the temperature box of
     its three TCAs (``per_axis``^3 grid samples, 25-125 degC) serially and on a pool of 2
     processes (their start-up, the NLP builds and the nominal solve included: the wall time of
     ``Study.run``), and a design study with rebuilt geometry (5 module lengths x
-    ``design_per_length`` temperatures, one NLP build per length)."""
+    ``design_per_length`` temperatures, one NLP build per length); ``overrides``: scenario
+    settings for the temperature box (e.g. ``solver.jit=true``)."""
     from tca_casadi.studies.batch.study import Study
     vary = {f"bending.tca{k}.temperature": [25, 125, per_axis] for k in (1, 2, 3)}
     out = {"samples": per_axis ** 3}
     for label, workers in (("serial", None), ("processes_2", 2)):
-        sim = Simulation.from_file(SCENARIOS / "bending_module.yaml")
+        sim = Simulation.from_file(SCENARIOS / "bending_module.yaml", list(overrides))
         result = Study(sim, vary=vary).run(workers=workers)
         out[f"{label}_samples_per_s"] = result.info["samples_per_second"]
         out[f"{label}_wall_s"] = result.info["wall_time_s"]

@@ -94,8 +94,9 @@ class DynamicSolver(CollocationSolver):
         return out
 
     def outputs(self, w, params):
-        """The :class:`~tca_casadi.solvers.outputs.StepOutputs` at scaled ``w`` and the step's parameter vector ``params``
-        (:meth:`CollocationSolver.outputs`), with the contacts' and grips' forces and gaps."""
+        """The :class:`~tca_casadi.solvers.outputs.StepOutputs` at scaled ``w`` and the step's
+        parameter vector ``params`` (:meth:`CollocationSolver.outputs`), with the contacts' and
+        grips' forces and gaps."""
         out = super().outputs(w, params)
         robot, nlp = self.robot, self.nlp
         if robot.obstacles or robot.grips:
@@ -504,8 +505,9 @@ class RodDynamics:
         return state.solution
 
     def outputs(self, state):
-        """The :class:`~tca_casadi.solvers.outputs.StepOutputs` of the end of the step that reached ``state`` (the start:
-        the state at rest, at its parameters; with friction, its closed contacts too)."""
+        """The :class:`~tca_casadi.solvers.outputs.StepOutputs` of the end of the step that
+        reached ``state`` (the start: the state at rest, at its parameters; with friction, its
+        closed contacts too)."""
         out = self._outputs(state)
         if self.robot.path_dependent:
             found = self.contact_solution(state)
@@ -523,8 +525,8 @@ class RodDynamics:
         return out
 
     def solved_outputs(self, state):
-        """The :class:`~tca_casadi.solvers.outputs.StepOutputs` of the point the step was solved at (the midpoint rule's
-        midpoint; else the end)."""
+        """The :class:`~tca_casadi.solvers.outputs.StepOutputs` of the point the step was solved
+        at (the midpoint rule's midpoint; else the end)."""
         return self.solver.outputs(state.solved, state.full)
 
     def tip_velocity(self, state):

@@ -323,10 +323,11 @@ class SquareSystem:
 
     def linearise(self, w, P):
         """:class:`Linearisation` at ``(w, P)``: adds the tip's derivatives, and ``dg/dP`` when
-        asked for: along up to :data:`~tca_casadi.solvers.linearisation.FORWARD_DIRECTIONS` directions by CasADi's forward mode
-        (:meth:`parameter_rates`: a residual's cost a direction, where the full structured
-        ``dg/dP`` costs as much as ``J_w``; a path's tangent and a sweep's sensitivities), in full
-        for more (an inverse query's temperatures), evaluated once."""
+        asked for: along up to :data:`~tca_casadi.solvers.linearisation.FORWARD_DIRECTIONS`
+        directions by CasADi's forward mode (:meth:`parameter_rates`: a residual's cost a
+        direction, where the full structured ``dg/dP`` costs as much as ``J_w``; a path's tangent
+        and a sweep's sensitivities), in full for more (an inverse query's temperatures),
+        evaluated once."""
         g, J_w = self.evaluate(w, P)
         T_w, T_P = self._tip_derivatives(w, P)
         w, P = np.array(w, float), np.array(P, float)
