@@ -3,6 +3,7 @@
 Arrays are shaped ``(3, n)`` (rotations ``(3, 3, n)``), SI units, global frame unless named
 ``*_body``. The JSON keys follow SPEC section 8.
 """
+import functools
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
@@ -48,7 +49,9 @@ class ModuleResult:
 
 @dataclass
 class ActuatorResult:
-    """One actuator's table row (SI, temperature degC) and its path (3, n) in the global frame."""
+    """One actuator's table row (SI, temperature degC) and its path (3, n) in the global frame
+    (``path_of``: the path, or a function of nothing that makes it, called when ``path`` is first
+    read: most solves never draw it)."""
     key: str
     kind: str
     temperature: Optional[float]
@@ -57,7 +60,7 @@ class ActuatorResult:
     length: float
     reference_length: float
     free_stroke: Optional[float]
-    path: np.ndarray
+    path_of: object = field(repr=False, compare=False)
     control: str = "temperature"          # temperature (TCA) | tension | displacement (tendon)
     tension_only: bool = False
     displacement: Optional[float] = None  # q [m], displacement-controlled tendons
@@ -66,6 +69,11 @@ class ActuatorResult:
     input: Optional[float] = None         # a custom law's input (SI)
     heated: bool = False                  # its law calls the input active (heated, pressurised)
     at_corner: bool = False               # tension_only, taut with no tension (see assemble.CORNER)
+
+    @functools.cached_property
+    def path(self):
+        """The path (3, n) [m] through the actuator's span in the global frame."""
+        return self.path_of() if callable(self.path_of) else self.path_of
 
     @property
     def stroke(self):

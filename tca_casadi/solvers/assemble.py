@@ -55,15 +55,10 @@ def _outline(shape, a, b, points):
 
 
 def actuator_result(actuator, module_res, tension, length, parameter, force_scale=1.0):
-    """:class:`ActuatorResult`: the path ``p + R r`` over the actuator's span; ``parameter`` is
-    the actuator's temperature, tension or displacement; ``force_scale`` [N] its module's
-    ``EI / L^2`` (a ``tension_only`` actuator with less than :data:`CORNER` of it is at the
+    """:class:`ActuatorResult` (its path ``p + R r`` over the actuator's span made when first
+    read: :func:`actuator_path`); ``parameter`` is the actuator's temperature, tension or
+    displacement; ``force_scale`` [N] its module's ``EI / L^2`` (a ``tension_only`` actuator with less than :data:`CORNER` of it is at the
     corner of its complementarity)."""
-    s_a, s_b = actuator.route.span
-    tol = 1e-12 * max(1.0, s_b)
-    inside = (module_res.s >= s_a - tol) & (module_res.s <= s_b + tol)
-    r = actuator.route.evaluate(np.clip(module_res.s[inside], s_a, s_b))[0]
-    path = module_res.p[:, inside] + np.einsum("ijk,jk->ik", module_res.R[:, :, inside], r)
     law = actuator.law if actuator.is_muscle else None
     stroke = float(length) - actuator.reference_length
     free = law.free_stroke(parameter) if law is not None else None
@@ -73,11 +68,21 @@ def actuator_result(actuator, module_res, tension, length, parameter, force_scal
         key=actuator.key, kind=actuator.kind, temperature=own["temperature"],
         reference_temperature=getattr(law, "reference_temperature", None) if own["temperature"] is not None else None,
         tension=float(tension), length=float(length), reference_length=actuator.reference_length,
-        free_stroke=None if free is None else float(free), path=path,
+        free_stroke=None if free is None else float(free), path_of=functools.partial(actuator_path, actuator, module_res),
         control=actuator.control, tension_only=actuator.tension_only, displacement=own["displacement"],
         slack_length=slack_length(actuator, stroke, float(tension), float(parameter)),
         pressure=own["pressure"], input=own["input"], heated=bool(law is not None and law.heated(parameter)),
         at_corner=bool(actuator.tension_only and abs(float(tension)) <= CORNER * force_scale))
+
+
+def actuator_path(actuator, module_res):
+    """The path ``p + R r`` (3, n) [m] of ``actuator`` over its span of the module
+    (:class:`ModuleResult`), at the module's nodes inside it."""
+    s_a, s_b = actuator.route.span
+    tol = 1e-12 * max(1.0, s_b)
+    inside = (module_res.s >= s_a - tol) & (module_res.s <= s_b + tol)
+    r = actuator.route.evaluate(np.clip(module_res.s[inside], s_a, s_b))[0]
+    return module_res.p[:, inside] + np.einsum("ijk,jk->ik", module_res.R[:, :, inside], r)
 
 
 def physics_warnings(robot, actuators, params):
