@@ -164,6 +164,9 @@ class EnergyAccount:
                 + self.dynamics.body_energies(state, params)[1])
 
     def _dissipated(self, previous, state):
+        """The energy [J] the rods' viscosity took over the step (none without damping)."""
+        if not any(np.any(d) for d in self.dynamics.damping):
+            return 0.0
         h = state.t - previous.t
         total = 0.0
         for m, ((before, _), (after, _)) in enumerate(zip(self.dynamics.nodes_of(previous), self.dynamics.nodes_of(state))):
