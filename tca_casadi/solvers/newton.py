@@ -47,8 +47,12 @@ def roundoff_floor(J, w):
     :data:`ROUNDOFF_FACTOR` roundoffs of the largest row's terms, ``eps max_i (|J| |w|)_i``."""
     if J.shape[0] == 0:
         return 0.0
-    terms = abs(J) @ np.abs(w)
-    return float(ROUNDOFF_FACTOR * np.finfo(float).eps * np.max(terms))
+    return floor_of_terms(abs(J) @ np.abs(w))
+
+
+def floor_of_terms(terms):
+    """:func:`roundoff_floor` from each row's ``(|J| |w|)_i`` (n,)."""
+    return float(ROUNDOFF_FACTOR * np.finfo(float).eps * np.max(terms)) if terms.size else 0.0
 class SquareSystem:
     """``g`` and ``J_w = dg/dw`` at ``(w, P)`` for the NLP ``nlp``, from the Functions
     ``residual (w, P) -> g`` and ``jacobian (w, P) -> (g, J_w)``; ``native``: the residual and
@@ -110,9 +114,8 @@ class SquareSystem:
         _, values = self._with_jacobian(w, P)
         ordered, take, columns = self._ordered_jacobian()
         ordered.data[:] = values[take]
-        terms = np.bincount(self._jacobian_pattern.indices, np.abs(values) * np.abs(w)[columns],
-                            minlength=self.shape[0]) if self.shape[0] else np.zeros(0)
-        floor = float(ROUNDOFF_FACTOR * np.finfo(float).eps * np.max(terms)) if terms.size else 0.0
+        floor = floor_of_terms(np.bincount(self._jacobian_pattern.indices, np.abs(values) * np.abs(w)[columns],
+                                           minlength=self.shape[0]))
         from ..resources import memory_guard
         with memory_guard(f"factorising the Jacobian of {self.shape[0]} unknowns ({take.size} nonzeros)", MEMORY_ADVICE):
             return OrderedLU.of_ordered(ordered, self._order[0]), floor

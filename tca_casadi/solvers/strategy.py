@@ -289,15 +289,21 @@ def _warm_steps(solver, rest, target, solution, first_step, min_step):
     return solution, lam, steps, iterations, None
 
 
+def _pushes(kind, tension_only, tension):
+    """Whether an actuator that only pulls (a muscle, not a tendon, not ``tension_only``) pushes:
+    a branch where continuation from rest is needed (SPEC section 6)."""
+    return kind != "tendon" and not tension_only and tension < 0
+
+
 def _needs_continuation(solution):
     return (not solution.converged) or any(
-        a.kind != "tendon" and not a.tension_only and a.tension < 0 for a in solution.actuators.values())
+        _pushes(a.kind, a.tension_only, a.tension) for a in solution.actuators.values())
 
 
 def _pushing(robot, actuators):
-    """Whether a muscle that only pulls pushes in ``actuators`` ({key: state with a ``tension``}):
-    :func:`_needs_continuation`'s test on a robot's actuators."""
-    return any(a.kind != "tendon" and not a.tension_only and actuators[a.key].tension < 0 for a in robot.actuators)
+    """:func:`_pushes` for any of ``robot``'s actuators in ``actuators`` ({key: state with a
+    ``tension``}, e.g. a sample's outputs)."""
+    return any(_pushes(a.kind, a.tension_only, actuators[a.key].tension) for a in robot.actuators)
 
 
 def lean_enough(robot):

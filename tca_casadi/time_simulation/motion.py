@@ -76,6 +76,7 @@ class EnergyAccount:
         self._work = {"actuator_work": 0.0, "load_work": 0.0, "dissipated_energy": 0.0, "impact_loss": 0.0,
                       "friction_work": 0.0, "integrator_loss": 0.0}
         self._start = None
+        self._damped = any(np.any(d) for d in dynamics.damping)
 
     def stored(self, state, solution):
         """``(kinetic, elastic, gravitational)`` [J] at a state and its Solution (or its
@@ -165,7 +166,7 @@ class EnergyAccount:
 
     def _dissipated(self, previous, state):
         """The energy [J] the rods' viscosity took over the step (none without damping)."""
-        if not any(np.any(d) for d in self.dynamics.damping):
+        if not self._damped:
             return 0.0
         h = state.t - previous.t
         total = 0.0
