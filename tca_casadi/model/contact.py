@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .arith import cross, is_casadi, sqrt
-from .obstacles import Box, Cylinder, Plane, Sphere, contact_point, gap
+from .obstacles import Box, Cylinder, Plane, Sphere, gap, separation
 from .rod import POINT_WRENCH
 from .rotations import rotation_matrix, rotation_numpy
 
@@ -106,8 +106,7 @@ def contact_geometry(shape, module, state):
     nearest the obstacle (3,) (global frame) at a deviation state."""
     p, R = contact_frame(state)
     outline = outline_of(module)
-    g, n = gap(shape, outline, p, R)
-    return g, n, contact_point(shape, outline, p, R)
+    return separation(shape, outline, p, R)
 
 
 def held_point(state, offset):

@@ -32,6 +32,14 @@ against it, and the gap is then an over-estimate by at most ``a^2 / (2 R)`` (``R
 shape's radius of curvature), zero where the section's plane contains the normal (a rod
 pressed sideways against a post or a ball).
 
+**A box** (:func:`separation`). ``g`` is the separation of the outline and the shape along one
+axis, ``n(p)``; any unit axis gives one, each a lower bound on the distance. Near a box's edge
+``n(p)`` turns about it, and a flat section held end-on against a face with its centerline
+above the edge would seem to cut into the box. So a box adds its three faces towards ``p`` as
+axes, and the gap is the largest separation, made smooth on one side (:func:`_one_sided`): the
+same as ``g`` wherever the face's normal is ``n(p)``. A section overhanging a face has its
+support point beyond it: the force acts over the face's edge (:meth:`Box.nearest_point`).
+
 Every function takes numbers (numpy) or CasADi symbols; the absolute values and the disc's
 square root are smoothed by :data:`SMOOTHING` (``sqrt(x^2 + eps^2) - eps``) so that Newton
 sees a C-infinity function, moving the gap by less than ``eps`` times the section's size.
@@ -46,6 +54,12 @@ from .arith import is_casadi
 SMOOTHING = 1e-9
 #: a rectangle's contact point slides from corner to corner over this tilt [rad] (:func:`contact_point`)
 ARM_SMOOTHING = 1e-3
+#: a box's face takes over from the normal at the centerline's closest point over this much of
+#: separation [m] (:func:`separation`; the gap is then at most half this much below the larger)
+EDGE_SMOOTHING = 1e-8
+#: where a flat section's contact acts on a box is clamped to its faces (across the normal) smoothly
+#: over this [m] (it moves a point inside a face by at most ``tau^2 / (4 b)``, 1e-16 m here)
+CLAMP_SMOOTHING = 1e-9
 
 
 def _ops(*values):
@@ -94,6 +108,18 @@ class Shape:
     def signed_distance(self, x):
         """``(d, n)``: signed distance [m] of ``x`` (3,) and the unit outward normal (3,)."""
         raise NotImplementedError
+
+    def separating_axes(self, x):
+        """The shape's separating axes beside its normal at ``x`` (3,): a list of ``(beyond,
+        a)``, ``beyond`` how far a plane through ``x`` across the unit axis ``a`` (3,) lies beyond
+        the shape's furthest point along ``a`` [m] (:func:`separation`). Empty for a smooth
+        shape: its normal at the closest point is the only axis."""
+        return []
+
+    def nearest_point(self, x, normal):
+        """The point where a contact along ``normal`` (3,) at the outline point ``x`` (3,) acts:
+        ``x`` itself but for a box (a flat section can overhang its face)."""
+        return x
 
 
 def _constant(array):
@@ -183,6 +209,50 @@ class Box(Shape):
         distance = ca.if_else(length > 0, length, deepest)
         return distance, self.to_global(normal, True)
 
+    def separating_axes(self, x):
+        """Its three faces towards ``x``: ``beyond = |x_local_k| - b_k`` along each face's outward
+        normal (a flat section beside a face separates from the box along that face's normal
+        even where the centerline's closest point is on an edge)."""
+        ops, symbolic = _ops(x)
+        x = _column(x, symbolic)
+        q_local = self.local(x, symbolic)
+        half = self._half(symbolic)
+        if symbolic:
+            import casadi as ca
+            sign, magnitude = ca.sign(q_local) + (q_local == 0), ca.fabs
+            unit = [ca.DM(row) for row in np.eye(3)]
+        else:
+            sign, unit, magnitude = np.where(q_local >= 0, 1.0, -1.0), list(np.eye(3)), np.abs
+        return [(magnitude(q_local[k]) - half[k], self.to_global(sign[k] * unit[k], symbolic))
+                for k in range(3)]
+
+    def nearest_point(self, x, normal):
+        """``x`` (3,) with its coordinates across ``normal`` (3,, unit) clamped to the box's
+        half-edges, smoothly over :data:`CLAMP_SMOOTHING`: a flat section overhanging a face
+        presses on the face's edge, not beyond it. The coordinate along the normal is kept
+        (each is clamped in proportion ``1 - n_k^2``, ``n_k`` the normal's component along
+        the box's axis ``k``), so a contact inside a face stays where the outline touches it."""
+        ops, symbolic = _ops(x, normal)
+        x = _column(x, symbolic)
+        q = self.local(x, symbolic)
+        normal = _column(normal, symbolic)
+        across = _constant(self.rotation.T) @ normal if symbolic else self.rotation.T @ normal
+        half = self._half(symbolic)
+        clamped = [q[k] + (1 - across[k] * across[k])
+                   * (_soft_plus(-half[k] - q[k], ops) - _soft_plus(q[k] - half[k], ops)) for k in range(3)]
+        local = ops.vertcat(*clamped) if symbolic else np.array(clamped)
+        centre = _constant(self.position) if symbolic else np.asarray(self.position, float)
+        return centre + self.to_global(local, symbolic)
+
+    def _half(self, symbolic):
+        half = self.size / 2 if is_casadi(self.size) else np.asarray(self.size, float) / 2
+        return _constant(half) if symbolic else half
+
+
+def _soft_plus(y, ops):
+    """``max(y, 0)`` made smooth over :data:`CLAMP_SMOOTHING`: ``(y + sqrt(y^2 + tau^2)) / 2``."""
+    return (y + ops.sqrt(y * y + CLAMP_SMOOTHING ** 2)) / 2
+
 
 def support(outline, normal, d1, d2, d3):
     """How far the outline (a scenario ``Circle`` or ``Rectangle``: ``shape``, ``diameter`` or
@@ -201,20 +271,56 @@ def support(outline, normal, d1, d2, d3):
 
 def gap(shape, outline, p, rotation):
     """``(g, n)``: the gap [m] between the body's outline at centerline point ``p`` (3,) with body
-    axes ``rotation`` (3, 3, columns d1 d2 d3) and ``shape``, and the shape's outward normal
-    there (module docstring). Negative: the body penetrates the shape."""
-    distance, normal = shape.signed_distance(p)
-    _, symbolic = _ops(p, rotation)
-    columns = [rotation[:, k] for k in range(3)]
-    return distance - support(outline, normal, *columns), normal
+    axes ``rotation`` (3, 3, columns d1 d2 d3) and ``shape``, and the direction the contact
+    force takes (the shape's outward normal there; module docstring). Negative: the body
+    penetrates the shape."""
+    g, n, _ = separation(shape, outline, p, rotation)
+    return g, n
 
 
 def contact_point(shape, outline, p, rotation):
-    """The point of the outline nearest the shape (3,): ``p`` moved by the support along ``-n``
-    (where a contact force acts; its arm about the centerline is ``point - p``)."""
+    """Where a contact force acts (3,): the outline's point nearest the shape, ``p`` moved by the
+    support along ``-n`` (on a box, the box's point nearest that); its arm about the centerline
+    is ``point - p``."""
+    return separation(shape, outline, p, rotation)[2]
+
+
+def separation(shape, outline, p, rotation):
+    """``(g, n, point)``: the gap [m], the force's direction (3,) and the point where it acts
+    (3,), from the largest separation of the outline and the shape along the shape's normal at
+    ``p`` and, for a box, along its faces' normals (module docstring: a separating axis each,
+    so the largest is the nearest the true distance and still never above it)."""
     distance, normal = shape.signed_distance(p)
+    ops, symbolic = _ops(p, rotation, normal)
     columns = [rotation[:, k] for k in range(3)]
-    ops, symbolic = _ops(p, rotation)
+    g = distance - support(outline, normal, *columns)
+    point = _outline_point(outline, normal, p, columns, ops, symbolic)
+    axes = shape.separating_axes(p)
+    for beyond, axis in axes:
+        other = beyond - support(outline, axis, *columns)
+        taken, weight = _one_sided(other - g, ops)
+        g = g + taken
+        normal = (1 - weight) * normal + weight * axis
+        point = (1 - weight) * point + weight * _outline_point(outline, axis, p, columns, ops, symbolic)
+    if axes:
+        normal = normal / ops.sqrt(_dot(normal, normal, symbolic))
+    point = shape.nearest_point(point, normal)
+    return g, normal, point
+
+
+def _one_sided(x, ops):
+    """``(phi, phi')`` of ``phi(x) = y^3 / (y^2 + tau^2)``, ``y = max(x, 0)``, ``tau`` =
+    :data:`EDGE_SMOOTHING`: exactly 0 for ``x <= 0``, ``x - tau^2 / x`` far above (twice
+    differentiable), so ``a + phi(b - a)`` is ``max(a, b)`` made smooth on one side only: where
+    ``a`` is the larger (a face's own normal, where both axes are the same) it is ``a`` exactly."""
+    y = ops.fmax(x, 0.0) if ops is not np else max(float(x), 0.0)
+    y2, t2 = y * y, EDGE_SMOOTHING ** 2
+    return y * y2 / (y2 + t2), y2 * (y2 + 3 * t2) / ((y2 + t2) * (y2 + t2))
+
+
+def _outline_point(outline, normal, p, columns, ops, symbolic):
+    """The outline's point furthest along ``-normal`` (its support point), smoothed as
+    :func:`_smooth_sign` says for a rectangle."""
     if outline.shape == "circle":
         d3 = columns[2]
         across = normal - _dot(normal, d3, symbolic) * d3

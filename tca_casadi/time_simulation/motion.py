@@ -180,15 +180,17 @@ class EnergyAccount:
 
 def _friction_work(before, after):
     """The energy [J] friction took from the rods over a step: ``-sum f_t . slip`` over the
-    contacts against obstacles closed at both ends (``contacts`` of the two StepOutputs; only a
+    contacts against obstacles (not the grips on free bodies, which a Solution's ``contacts``
+    also lists: :func:`_body_friction_work` takes those) closed at both ends (``contacts`` of the two StepOutputs; only a
     contact closed at the step's start is anchored and carries friction), the slip the rod's
     held material point's motion over the step (:func:`_slip`). With Coulomb's law ``f_t``
     opposes the slip, so it is never negative; a sticking contact does not move."""
     if getattr(after, "contacts", None) is None or getattr(before, "contacts", None) is None:
         return 0.0
     was = {(c.module, c.s, c.obstacle) for c in before.contacts}
+    bodies = {body.name for body in getattr(after, "bodies", None) or ()}     # their grips: _body_friction_work
     return float(sum(-c.tangential_force @ _slip(c) for c in after.contacts
-                     if c.friction > 0 and (c.module, c.s, c.obstacle) in was))
+                     if c.friction > 0 and c.obstacle not in bodies and (c.module, c.s, c.obstacle) in was))
 
 
 def _slip(contact):

@@ -56,14 +56,14 @@ def test_contact_the_dynamics_does_not_model_is_refused_in_one_line(setting, say
     assert "\n" not in str(caught.value) and isinstance(caught.value, ScenarioError)
 
 
-@pytest.mark.parametrize("seed", [3, 7])
+@pytest.mark.parametrize("seed", [3])
 def test_random_robots_strike_a_ball_with_friction_and_keep_their_energy_account(seed):
     """A ball with Coulomb friction 0.2 placed halfway along the tip's largest excursion of the
     free run, its surface where the tip's outline reaches then: the robot strikes it and slides
     over it. In steps of 1/40 of the robot's shortest time scale, the energy account closes to
     1e-4 of the energy in play with the impacts and friction (kinetic + elastic + gravitational +
     dissipated + friction work + impact loss + implicit Euler's loss at the impacts = work in;
-    measured 6.1e-5 and 2.8e-5); friction work and impact loss never decrease, and friction
+    measured 6.1e-5; seed 7, 2.8e-5, is left out of the suite for its 24 s); friction work and impact loss never decrease, and friction
     work is positive (the tip slid); every step balances globally with the contact forces
     (1e-6), no candidate cuts into the ball (1e-9 m) and every contact force is within the cone.
     In steps of 1/5 the account is off by BDF2's own damping of the modes that step does not
