@@ -39,20 +39,22 @@ def save_animation(result, directory, fps=8, progress=None, **view):
         moving = result.transition_objects[index] if result.transition_objects else [{}] * len(transition)
         final = result.objects[index] if result.objects else {}
         note = f"\n[{result.stage[index]}, not a TCA]" if result.stage and result.stage[index] else ""
-        frames += [(f"-> {name}{note}", s, o) for (_, s), o in zip(transition, moving)] + [(name + note, solution, final)] * 3
+        frames += [(f"-> {name}{note}", s, o, 1) for (_, s), o in zip(transition, moving)]
+        frames.append((name + note, solution, final, 3))              # each step held three frames
     fig = plt.figure(figsize=(5.6, 5.6))
     ax = fig.add_subplot(projection="3d")
     limits = _limits(result)
 
     def draw(index):
         ax.clear()
-        title, solution, objects = frames[index]
+        title, solution, objects, _ = frames[index]
         draw_robot(solution, ax=ax, title=title, objects=objects.values(), limits=limits, **view)
         if progress is not None:
             progress((index + 1) / len(frames), title)
         return []
 
-    paths = _save_movies(fig, draw, len(frames), directory / "sequence", fps)
+    holds = [frame[3] for frame in frames]
+    paths = _save_movies(fig, draw, len(frames), directory / "sequence", fps, holds=holds)
     plt.close(fig)
     return paths
 
@@ -61,13 +63,15 @@ def save_animation(result, directory, fps=8, progress=None, **view):
 FRAME_ZOOM = 0.94
 
 
-def _save_movies(fig, draw, count, stem, fps):
+def _save_movies(fig, draw, count, stem, fps, holds=None):
     """Animate ``draw(frame)`` over ``count`` frames of ``fig`` into ``STEM.gif`` (and
     ``STEM.mp4`` when ffmpeg is on the PATH), each written atomically; returns the paths.
+    ``holds``: for how many frame periods each frame is shown (1 each by default).
 
     Each frame is rendered once (matplotlib's ``FuncAnimation.save`` renders every frame twice,
-    and again for each writer): the GIF's frames are the canvas's pixels; an MP4 takes the
-    frames through matplotlib's ffmpeg writer."""
+    and again for each writer), however long it is held: the GIF's frames are the canvas's
+    pixels, each with its duration; an MP4 takes the frames through matplotlib's ffmpeg writer."""
+    holds = [1] * count if holds is None else list(holds)
     from PIL import Image
     fig.subplots_adjust(left=0.0, right=1.0, bottom=0.05, top=0.9)    # the drawing fills the frame
     paths, images = [stem.with_suffix(".gif")], []
@@ -84,11 +88,11 @@ def _save_movies(fig, draw, count, stem, fps):
                 ax.set_box_aspect(ax.get_box_aspect(), zoom=FRAME_ZOOM)
             fig.canvas.draw()
             images.append(Image.fromarray(np.asarray(fig.canvas.buffer_rgba())).convert("RGB"))
-            if movie is not None:
+            for _ in range(holds[frame] if movie is not None else 0):
                 movie.grab_frame()
         with atomic_path(paths[0]) as temporary:
             images[0].save(temporary, format="GIF", save_all=True, append_images=images[1:],
-                           duration=int(1000 / fps), loop=0)
+                           duration=[int(1000 / fps) * hold for hold in holds], loop=0)
     return paths
 
 
