@@ -294,18 +294,16 @@ def separation(shape, outline, p, rotation):
     ops, symbolic = _ops(p, rotation, normal)
     columns = [rotation[:, k] for k in range(3)]
     g = distance - support(outline, normal, *columns)
-    point = _outline_point(outline, normal, p, columns, ops, symbolic)
     axes = shape.separating_axes(p)
     for beyond, axis in axes:
         other = beyond - support(outline, axis, *columns)
         taken, weight = _one_sided(other - g, ops)
         g = g + taken
         normal = (1 - weight) * normal + weight * axis
-        point = (1 - weight) * point + weight * _outline_point(outline, axis, p, columns, ops, symbolic)
-    if axes:
-        normal = normal / ops.sqrt(_dot(normal, normal, symbolic))
-    point = shape.nearest_point(point, normal)
-    return g, normal, point
+    if not axes:
+        return g, normal, _outline_point(outline, normal, p, columns, ops, symbolic)
+    normal = normal / ops.sqrt(_dot(normal, normal, symbolic))
+    return g, normal, shape.nearest_point(_outline_point(outline, normal, p, columns, ops, symbolic), normal)
 
 
 def _one_sided(x, ops):
