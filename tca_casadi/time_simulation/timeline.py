@@ -18,6 +18,7 @@ from ..scenario.loader import validate
 from ..scenario.overrides import apply_overrides, without_set
 from ..solvers.thermal import Drive, Schedule, integrate, steady_state
 from .heating import TimeSeries, follow_parameters
+from ..text import signed
 
 #: drive kinds the thermal model heats (``temperature`` sets the temperature directly)
 HEATED = ("power", "voltage", "current", "setpoint")
@@ -469,13 +470,13 @@ class TimeSimulation:
             lines.append(f"  {key:<24} {entry['drive']:<11} peak {entry['peak_temperature']:.2f} degC{extra}")
         if series.solutions:
             tip = series.outputs[-1].tip_position * 1e3
-            lines.append("  tip at the end [mm]: " + " ".join(f"{v:+.4f}" for v in tip))
+            lines.append("  tip at the end [mm]: " + " ".join(signed(v) for v in tip))
         for name, entry in report["objects"].items():
             picked = ", ".join(f"{t:g}" for t in entry["picked_at"]) or ("held from the start" if entry["held_at_start"]
                                                                        else "never")
             down = ", ".join(f"{t:g}" for t in entry["put_down_at"])
             down = f"put down at {down} s" if down else "never put down"
-            centre = " ".join(f"{v * 1e3:+.2f}" for v in entry["final_center"])
+            centre = " ".join(signed(v * 1e3, 2) for v in entry["final_center"])
             picked = picked if picked.startswith("held") or picked == "never" else f"picked at {picked} s"
             slides = ", ".join(f"{t:g}" for t in entry["slides_at"])
             slides = f", SLIDES in its grip from {slides} s" if slides else ""

@@ -67,7 +67,9 @@ def test_a_block_on_an_incline_within_its_friction_stays(tangent):
     corners = series.views[-1].bodies[0].corners
     normal, tangential = corners.normal_forces.sum(), corners.tangential_forces.sum(axis=0)
     assert_allclose(np.hypot(normal, np.linalg.norm(tangential)), MASS * G, rtol=1e-9)
-    assert_allclose(np.linalg.norm(tangential) / normal, tangent, rtol=1e-9)
+    # the open grip (the post is 0.3 m away) leaves 2e-11 N on the block from its smoothed
+    # complementarity, 1e-9 of the friction force
+    assert_allclose(np.linalg.norm(tangential) / normal, tangent, rtol=1e-8)
 
 
 def test_a_cube_slips_out_of_its_grip_when_the_lift_accelerates_past_mu_n_over_m_minus_g():
