@@ -21,6 +21,18 @@ def main(argv=None):
     if argv is None:
         _take_interrupts()
     try:
+        return _run(argv)
+    except Exception:
+        # a Ctrl-C that lands inside CasADi's argument conversion comes back as another error
+        # (SWIG tries the next overload and reports none matched: NotImplementedError)
+        if not _INTERRUPTS:
+            raise
+        return _interrupted(argv)
+
+
+def _run(argv):
+    """:func:`main`'s command, its errors reported in one line."""
+    try:
         args = build_parser().parse_args(argv)
         logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                             format="%(levelname)s %(name)s: %(message)s")
@@ -66,10 +78,17 @@ def _interrupted(argv):
     return 130
 
 
+#: the Ctrl-Cs this process took (run as the program)
+_INTERRUPTS = []
+
+
 def _take_interrupts():
     """Ctrl-C raises KeyboardInterrupt in this process, even where the parent ignored SIGINT
-    (Python keeps an inherited ``SIG_IGN``)."""
-    signal.signal(signal.SIGINT, signal.default_int_handler)
+    (Python keeps an inherited ``SIG_IGN``), and is remembered (:data:`_INTERRUPTS`)."""
+    def interrupt(number, frame):
+        _INTERRUPTS.append(number)
+        signal.default_int_handler(number, frame)
+    signal.signal(signal.SIGINT, interrupt)
 
 
 def _exit_interrupted():
