@@ -144,6 +144,36 @@ def test_failed_samples_are_rows(bending):
     assert frame.loc[~bad, "converged"].all()
 
 
+def test_a_serial_chunk_starts_from_the_chunk_before_it(bending, monkeypatch):
+    """Serially, a chunk whose first sample follows the last one solved starts warm from its
+    answer, where every chunk's first sample used to start cold (continuation from the
+    reference state): the same rows as one chunk, to 1e-9 m, with fewer cold starts. A chunk
+    after one that resume skipped starts cold."""
+    import tca_casadi.studies.batch.executors as executors
+    import tca_casadi.studies.batch.study as study_module
+    from tca_casadi.solvers.strategy import SolveStrategy
+    cold, starts = [], []
+    original, solve_from = SolveStrategy.continue_from_rest, executors.solve_chunk_from
+    monkeypatch.setattr(SolveStrategy, "continue_from_rest",
+                        lambda self, *a, **k: cold.append(1) or original(self, *a, **k))
+    monkeypatch.setattr(executors, "solve_chunk_from",
+                        lambda chunk, progress=None, start=None: starts.append(start) or solve_from(chunk, progress, start))
+    vary = {TEMPERATURES[1]: [25, 125, 7], TEMPERATURES[2]: [25, 125, 3]}
+    whole = Study(tc.Simulation.from_file(bending), vary=vary).run()
+    in_one_chunk, cold[:] = len(cold), []
+    monkeypatch.setattr(study_module, "MAX_CHUNK", 6)
+    study = Study(tc.Simulation.from_file(bending), vary=vary)
+    starts.clear()
+    chunked = study.run()
+    assert len(starts) == 4 and starts[0] is None and all(s is not None and s.converged for s in starts[1:])
+    assert len(cold) == in_one_chunk and chunked.frame["converged"].all()
+    assert_allclose(chunked.frame[TIP].to_numpy(float), whole.frame[TIP].to_numpy(float), rtol=0, atol=1e-9)
+    chunks = study.chunks()
+    starts.clear()
+    executors.run_serial([chunks[0], chunks[2], chunks[3]], lambda chunk, rows: None)    # chunk 1 done before
+    assert starts[0] is None and starts[1] is None and starts[2] is not None
+
+
 def test_resume_finishes_an_interrupted_study(bending, tmp_path):
     """A study stopped after 5 samples keeps them in study_rows.jsonl; --resume solves only the
     rest and gives the same rows as an uninterrupted run."""

@@ -16,7 +16,8 @@ depend on where it ran.
 
 **Chunks.** A group's ordered samples are cut into chunks (about four per worker, at most
 :data:`MAX_CHUNK`); a worker solves a chunk's first sample cold (continuation from the reference
-state) and each next one warm from the last converged one; a warm solve that fails falls back to
+state; serially, warm from the chunk before it where that ended on the sample before) and each
+next one warm from the last converged one; a warm solve that fails falls back to
 continuation (:meth:`Simulation.solve`). Rows stream back as chunks finish; with an output
 directory they are appended to ``study_rows.jsonl`` at once, and ``resume`` skips the samples
 found there.
@@ -208,7 +209,8 @@ class Study:
                 out.append(Chunk(key, raw, structure, meshes, degree, self.parameters,
                                  [int(i) for i in self.design.ids[part]],
                                  self.design.values[np.ix_(part, columns)].tolist(), self.outputs,
-                                 self.sim.scenario._allow_code, self.compiles))
+                                 self.sim.scenario._allow_code, self.compiles,
+                                 int(self.design.ids[positions[start - 1]]) if start else None))
         return out
 
     @property

@@ -46,6 +46,9 @@ class Chunk:
     allow_code: bool = False
     #: ``solver.jit: auto`` decided to compile (a study of :data:`AUTO_JIT_SAMPLES` or more)
     compiled: bool = False
+    #: the id of the sample just before this chunk's first in its group's order (None: the
+    #: group's first): a serial run starts the chunk from that sample's answer where it has it
+    after: int = None
 
 
 def solve_chunk(chunk, progress=None):
@@ -55,11 +58,18 @@ def solve_chunk(chunk, progress=None):
     checked (``balance [-]``) at every :data:`BALANCE_EVERY`-th sample and the chunk's last (at
     every sample where outputs are asked for, or the robot has contact or friction); the others'
     is NaN."""
+    return solve_chunk_from(chunk, progress)[0]
+
+
+def solve_chunk_from(chunk, progress=None, start=None):
+    """``(rows, last)``: :func:`solve_chunk`'s rows, its first sample warm-started from
+    ``start`` (the answer at the sample ``chunk.after``, from the chunk before it in a serial
+    run; None: cold, from the reference state), and the last converged answer (or ``start``)."""
     from ..parameters import resolve_parameters
     sim, base = _prepared(chunk)
     parameters = resolve_parameters(sim.robot, base, chunk.paths)
     where = f"{socket.gethostname()}:{os.getpid()}"
-    rows, previous, last = [], None, len(chunk.ids) - 1
+    rows, previous, last = [], start, len(chunk.ids) - 1
     for k, (sample, values) in enumerate(zip(chunk.ids, chunk.values)):
         started = time.perf_counter()
         # a Solution with its global balance every BALANCE_EVERY samples and at the chunk's last;
@@ -80,7 +90,7 @@ def solve_chunk(chunk, progress=None):
         rows.append(row)
         if progress is not None:
             progress(row)
-    return rows
+    return rows, previous
 
 
 def _prepared(chunk):
