@@ -308,16 +308,33 @@ class SquareSystem:
         """A start for Newton at ``P_to`` from the root ``w`` at ``P_from``: the tangent
         predictor ``w - J_w^-1 J_P (P_to - P_from)`` with ``lu`` (factors at or near ``w``; the
         error falls from O(dP) to O(dP^2)), or ``w`` itself where that has the smaller residual
-        (factors too far off, a kink of a contact on the way)."""
-        step = (np.asarray(P_to, float) - np.asarray(P_from, float)).reshape(-1, 1)
+        (factors too far off, a kink of a contact on the way). Where the step repeats the last
+        one (the same ``dP`` from where it ended: a study's grid along one axis), the last
+        tangent's error ``w - tangent`` (its ``dP^2 w'' / 2``, and the stale factors' part) is
+        added as well, leaving O(dP^3), if that has the smallest residual."""
+        P_from, P_to = np.asarray(P_from, float), np.asarray(P_to, float)
+        step = (P_to - P_from).reshape(-1, 1)
         if lu is None or not np.any(step):
             return w
         tangent = w - lu.solve(self.parameter_rates(w, P_from, step))[:, 0]
-        g_tangent = self._residual(tangent, P_to)[0]
-        if not np.all(np.isfinite(g_tangent)):
-            return w
-        size = float(np.max(np.abs(g_tangent)))
-        return tangent if size < float(np.max(np.abs(self._residual(w, P_to)[0]))) else w
+        carried, self._last_tangent = self._tangent_error(w, P_from, step), (P_from, P_to, tangent)
+        best, size = w, float(np.max(np.abs(self._residual(w, P_to)[0])))
+        for start in (tangent,) if carried is None else (tangent, tangent + carried):
+            g = self._residual(start, P_to)[0]
+            if np.all(np.isfinite(g)) and float(np.max(np.abs(g))) < size:
+                best, size = start, float(np.max(np.abs(g)))
+        return best
+
+    def _tangent_error(self, w, P_from, step):
+        """``w - tangent`` of the last :meth:`predicted` where it predicted ``w``'s point
+        (``P_from``) by the same step, else None."""
+        last = getattr(self, "_last_tangent", None)
+        if last is None or last[2].shape != w.shape or not np.array_equal(last[1], P_from):
+            return None
+        before = (last[1] - last[0]).reshape(-1, 1)
+        if not np.allclose(before, step, rtol=1e-9, atol=0):
+            return None
+        return w - last[2]
 
     def parameter_jacobian(self, w, P):
         """``dg/dP`` (sparse, (n, nP)) at ``(w, P)``, in full."""
