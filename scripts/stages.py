@@ -14,18 +14,31 @@ from collections import defaultdict
 
 def _targets():
     """``(stage, class, method name)`` of every stage timed."""
+    from tca_casadi.discretisation.structure import StructuredJacobian
+    from tca_casadi.solvers import compiled, native
     from tca_casadi.solvers.collocation import CollocationSolver
+    from tca_casadi.studies.sweep.run import Sweep
+    from tca_casadi.solvers.native import NativeChord
     from tca_casadi.solvers.newton import OrderedLU, SquareSystem
     from tca_casadi.simulation import Simulation
     from tca_casadi.time_simulation.motion import EnergyAccount
     return [("NLP builds", CollocationSolver, "__init__"),
+            ("C compiles (solver.jit; kept on disk)", compiled, "compiled_library"),
+            ("C compiles (solver.jit; kept on disk)", native, "compiled_library"),
+            ("a sweep point's record (sensitivities, singular value)", Sweep, "_record"),
             ("static solves (a run's start)", Simulation, "solve"),
             ("residual evaluations (CasADi)", SquareSystem, "residual"),
             ("Jacobian evaluations (CasADi)", SquareSystem, "evaluate"),
+            ("Jacobian evaluations (structured product)", StructuredJacobian, "__call__"),
             ("factorisations (SuperLU)", SquareSystem, "factorise"),
+            ("factorisations in Newton (SuperLU)", SquareSystem, "_fresh_factors"),
             ("triangular solves (SuperLU)", OrderedLU, "solve"),
+            ("chord steps in C (solver.jit)", NativeChord, "steps"),
+            ("tangent predictor (studies)", SquareSystem, "predicted"),
+            ("linearisations (a path's tangents, det J's sign)", SquareSystem, "linearise"),
             ("Newton's loop (Python)", SquareSystem, "newton"),
             ("Solution assembly (outputs, balance)", CollocationSolver, "_assemble"),
+            ("step outputs without a Solution", CollocationSolver, "outputs"),
             ("energy account", EnergyAccount, "add")]
 
 
@@ -75,6 +88,15 @@ class StageProfile:
         rest = total - sum(self.seconds.values())
         out["other (Python between stages)"] = {"s": rest, "calls": 1, "share": rest / total}
         return out
+
+
+def with_imports(report, seconds, total):
+    """``report`` (:meth:`StageProfile.report` of a run of ``total`` seconds) with the imports
+    before the run (``seconds``, counted in its "other") as a stage of their own."""
+    out, other = dict(report), report["other (Python between stages)"]["s"] - seconds
+    out["other (Python between stages)"] = {"s": other, "calls": 1, "share": other / total}
+    out["imports (tca_casadi, CasADi, scipy)"] = {"s": seconds, "calls": 1, "share": seconds / total}
+    return out
 
 
 def print_stages(title, report, per=None):

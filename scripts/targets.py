@@ -8,6 +8,7 @@ the timed run (the compile is kept on disk, as a user's second run finds it).
     python scripts/bench.py --targets [--quick]       # results/bench_targets.json
 """
 import json
+import shutil
 import statistics
 import subprocess
 import sys
@@ -53,8 +54,53 @@ def _cli(*arguments):
     return [sys.executable, "-c", MEASURED, *map(str, arguments)]
 
 
-def row(what, measured, target, unit, met, note=""):
-    return {"what": what, "measured": measured, "target": target, "unit": unit, "met": bool(met), "note": note}
+def row(what, measured, target, unit, met, note="", profile=None):
+    """A target's row; ``profile``: the code :func:`where_the_time_goes` runs for it when it is not met."""
+    return {"what": what, "measured": measured, "target": target, "unit": unit, "met": bool(met), "note": note,
+            "profile": profile}
+
+
+#: a target's code run in a fresh process under :class:`stages.StageProfile` (its imports, in
+#: "other", included): prints the report as JSON on a line of its own
+PROFILED = """
+import json, sys, time
+started = time.perf_counter()
+sys.path[:0] = [{scripts!r}]
+import scipy.optimize, scipy.sparse.linalg, tca_casadi.cli, tca_casadi.simulation
+from stages import StageProfile, with_imports
+imported = time.perf_counter()
+with StageProfile() as profile:
+    exec(compile(sys.argv[1], "<target>", "exec"))
+total = time.perf_counter() - started
+print("STAGES " + json.dumps({{"total_s": total, "stages": with_imports(profile.report(total), imported - started, total)}}))
+"""
+#: each unmet target's run, as the profile repeats it (the code of :data:`PROFILED`)
+PROFILES = {
+    "sweep": ("from tca_casadi.simulation import Simulation\nfrom tca_casadi.studies.sweep.run import Sweep\n"
+              f"sim = Simulation.from_file({str(SCENARIOS / 'bending_module.yaml')!r})\n"
+              "Sweep(sim, ['bending.tca2.temperature', 'bending.tca3.temperature'], 25, 125, steps=101).run()"),
+    "till": ("from tca_casadi.cli import main\n"
+             f"main(['simulate', {str(SCENARIOS / 'analytic' / 'steel_cantilever.yaml')!r}, '--dt', '0.002', "
+             "'--set', 'duration={duration}', '--set', 'solver.jit=true', '--no-plot', '--no-animation', '--quiet', "
+             "'-o', {folder!r}])"),
+    "dynamics": ("from bench import dynamics_rate\ndynamics_rate({name!r}, 0.002, 50, jit=True)"),
+    "inverse": ("from tca_casadi.cli import main\n"
+                f"main(['inverse', {str(SCENARIOS / 'arm.yaml')!r}, '--target-position', *{{target!r}}, '--no-plot', "
+                "'--quiet', '-o', {folder!r}])"),
+    "study": ("from tca_casadi.simulation import Simulation\nfrom tca_casadi.studies.batch.study import Study\n"
+              f"sim = Simulation.from_file({str(SCENARIOS / 'bending_module.yaml')!r}, [{{jit!r}}])\n"
+              "Study(sim, vary={{f'bending.tca{{k}}.temperature': [25, 125, {per_axis}] for k in (1, 2, 3)}}).run()"),
+}
+
+
+def where_the_time_goes(code):
+    """``{"total_s", "stages"}``: :data:`PROFILED` of ``code`` in a fresh process."""
+    command = [sys.executable, "-c", PROFILED.format(scripts=str(Path(__file__).parent)), code]
+    process = subprocess.run(command, capture_output=True, text=True, cwd=ROOT)
+    lines = [line for line in process.stdout.splitlines() if line.startswith("STAGES ")]
+    if not lines:
+        raise RuntimeError(f"the profiled run failed: {process.stderr[-2000:]}")
+    return json.loads(lines[-1][len("STAGES "):])
 
 
 def warm_solve(repeats):
@@ -116,12 +162,16 @@ def arm_inverse():
                                          *(f"{x:.9f}" for x in target), "--no-plot", "--quiet", "-o", folder))
         walls.append(wall)
         reached.append("REACHED" in process.stdout)
-    return {"wall_s": statistics.median(walls), "walls_s": walls, "exit": process.returncode, "reached": all(reached)}
+    return {"wall_s": statistics.median(walls), "walls_s": walls, "exit": process.returncode, "reached": all(reached),
+            "target": [f"{x:.9f}" for x in target]}
 
 
 def targets(quick=False):
-    """Every target's row (module docstring); ``quick``: the cheap ones, 0.5 s of Till's rod."""
+    """Every target's row (module docstring), and where a target is not met a profile by stage of
+    its run (:func:`where_the_time_goes`, not in a ``quick`` run); ``quick``: the cheap ones,
+    0.5 s of Till's rod."""
     sys.path.insert(0, str(Path(__file__).parent))
+    scratch = tempfile.mkdtemp(prefix="tca_targets_")
     from bench import dynamics_rate, study_rates, till_cantilever, wall_pressing
     rows = []
     warm = warm_solve(5 if quick else 50)
@@ -133,17 +183,20 @@ def targets(quick=False):
         r = sweep[jit]
         rows.append(row(f"bending module: build + 101-step sweep, in a fresh process after its imports"
                         f"{' (solver.jit)' if jit == 'true' else ''}", r["build_sweep_s"], 0.3, "s",
-                        r["completed"] and r["build_sweep_s"] <= 0.3, f"imports {r['import_s']:.2f} s before it"))
+                        r["completed"] and r["build_sweep_s"] <= 0.3, f"imports {r['import_s']:.2f} s before it",
+                        PROFILES["sweep"] if jit == "false" else None))
     duration = 0.5 if quick else 25.0
     till = till_cantilever(duration, jit=True)
     rows.append(row(f"Till's steel cantilever, dt 2 ms, {duration:g} s, whole simulate call (solver.jit)",
                     till["real_time_factor"], 20.0, "x real time", till["real_time_factor"] >= 20,
-                    f"{till['wall_s']:.2f} s; first mode {till['first_mode_hz']:.3f} Hz"))
+                    f"{till['wall_s']:.2f} s; first mode {till['first_mode_hz']:.3f} Hz",
+                    PROFILES["till"].format(duration=duration, folder=scratch)))
     for name, goal in ((("bending module", 20.0),) if quick else (("bending module", 20.0), ("arm", 2.0))):
         rate = dynamics_rate(name, 0.002, 5 if quick else 50, jit=True)
         rows.append(row(f"{name}: BDF2 dynamics at dt 2 ms (solver.jit)", rate["real_time_factor"], goal,
                         "x real time", (rate["real_time_factor"] or 0) >= goal,
-                        f"{rate['step_s'] * 1e3:.2f} ms per step" if rate["step_s"] else rate.get("message", "")))
+                        f"{rate['step_s'] * 1e3:.2f} ms per step" if rate["step_s"] else rate.get("message", ""),
+                        PROFILES["dynamics"].format(name=name)))
     wall = wall_pressing(5 if quick else 50)
     rows.append(row("bending module pressing on a wall (issue 33): BDF2 at dt 2 ms, real-time factor against "
                     "the same run without the wall", wall["ratio"], 0.5, "ratio", (wall["ratio"] or 0) >= 0.5,
@@ -160,23 +213,34 @@ def targets(quick=False):
         inverse = arm_inverse()
         rows.append(row("arm: tca-casadi inverse, whole call (median of 3)", inverse["wall_s"], 2.0, "s",
                         inverse["wall_s"] <= 2 and inverse["reached"],
-                        f"reached {inverse['reached']}; runs " + ", ".join(f"{w:.2f}" for w in inverse["walls_s"]) + " s"))
+                        f"reached {inverse['reached']}; runs " + ", ".join(f"{w:.2f}" for w in inverse["walls_s"]) + " s",
+                        PROFILES["inverse"].format(target=inverse["target"], folder=scratch)))
         studies = study_rates(22, 2)
         rows.append(row("bending module temperature box: study samples per second per core (serial)",
                         studies["serial_samples_per_s"], 1000.0, "samples/s", studies["serial_samples_per_s"] >= 1000,
-                        f"{studies['samples']} samples"))
+                        f"{studies['samples']} samples", PROFILES["study"].format(jit="solver.jit=auto", per_axis=22)))
         study_rates(3, 1, ["solver.jit=true"])           # its compile, kept on disk, not timed
         compiled = study_rates(22, 1, ["solver.jit=true"])
         rows.append(row("bending module temperature box: study samples per second per core (serial, solver.jit)",
                         compiled["serial_samples_per_s"], 1000.0, "samples/s",
-                        compiled["serial_samples_per_s"] >= 1000, f"{compiled['samples']} samples"))
+                        compiled["serial_samples_per_s"] >= 1000, f"{compiled['samples']} samples",
+                        PROFILES["study"].format(jit="solver.jit=true", per_axis=22)))
+    for r in rows:                        # where the time goes, where a target is not met
+        if not r["met"] and r["profile"] and not quick:
+            r["stages"] = where_the_time_goes(r["profile"])
+    shutil.rmtree(scratch, ignore_errors=True)
     return rows
 
 
 def print_targets(rows):
+    from stages import print_stages
     width = max(len(r["what"]) for r in rows)
     for r in rows:
         value = r["measured"]
         shown = "n/a" if value is None or not np.isfinite(value) else f"{value:.3g}"
         print(f"{r['what']:<{width}}  {shown:>8} {r['unit']:<11} target {r['target']:g}  "
               f"{'met' if r['met'] else 'NOT MET'}{'  (' + r['note'] + ')' if r['note'] else ''}")
+    for r in rows:
+        if r.get("stages"):
+            print_stages(f"where the time goes (not met): {r['what']}, profiled in a fresh process, imports "
+                         f"included ({r['stages']['total_s']:.2f} s)", r["stages"]["stages"])

@@ -68,3 +68,16 @@ def test_wall_pressing_quick():
     result = wall_pressing(steps=3)
     assert result["wall"]["unknowns"] > result["no_wall"]["unknowns"]
     assert result["ratio"] is not None and result["ratio"] > 0
+
+
+def test_a_target_not_met_says_where_its_time_goes():
+    """``bench.py --targets`` profiles each target it does not meet by stage, in a fresh process:
+    the sweep's stages (its imports and NLP builds among them) add up to its run, and every
+    point's record is one call."""
+    from targets import PROFILES, where_the_time_goes
+    profile = where_the_time_goes(PROFILES["sweep"])
+    stages = profile["stages"]
+    assert abs(sum(row["s"] for row in stages.values()) - profile["total_s"]) < 1e-9 * profile["total_s"]
+    assert stages["imports (tca_casadi, CasADi, scipy)"]["s"] > 0 and stages["NLP builds"]["calls"] >= 1
+    assert stages["a sweep point's record (sensitivities, singular value)"]["calls"] == 101
+    assert all(row["s"] >= 0 for name, row in stages.items() if name != "other (Python between stages)")
