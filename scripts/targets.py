@@ -83,7 +83,7 @@ PROFILES = {
              f"main(['simulate', {str(SCENARIOS / 'analytic' / 'steel_cantilever.yaml')!r}, '--dt', '0.002', "
              "'--set', 'duration={duration}', '--set', 'solver.jit=true', '--no-plot', '--no-animation', '--quiet', "
              "'-o', {folder!r}])"),
-    "dynamics": ("from bench import dynamics_rate\ndynamics_rate({name!r}, 0.002, 50, jit=True)"),
+    "dynamics": ("from bench import dynamics_rate\ndynamics_rate({name!r}, 0.002, 500, jit=True)"),     # the steps show
     "inverse": ("from tca_casadi.cli import main\n"
                 f"main(['inverse', {str(SCENARIOS / 'arm.yaml')!r}, '--target-position', *{{target!r}}, '--no-plot', "
                 "'--quiet', '-o', {folder!r}])"),
