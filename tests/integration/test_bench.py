@@ -81,3 +81,16 @@ def test_a_target_not_met_says_where_its_time_goes():
     assert stages["imports (tca_casadi, CasADi, scipy)"]["s"] > 0 and stages["NLP builds"]["calls"] >= 1
     assert stages["a sweep point's record (sensitivities, singular value)"]["calls"] == 101
     assert all(row["s"] >= 0 for name, row in stages.items() if name != "other (Python between stages)")
+
+
+def test_targets_quick(tmp_path, capsys):
+    """``bench.py --targets --quick``: a row per cheap target, each with its measured value, its
+    goal and whether it is met, and the JSON beside it."""
+    import json
+    from bench import main
+    rows = main(["--targets", "--quick", "-o", str(tmp_path / "bench.json")])
+    assert len(rows) == 6 and all(r["measured"] is not None and r["target"] > 0 for r in rows)
+    assert rows[0]["what"].startswith("bending module: warm solve") and rows[0]["measured"] < 50   # ms
+    assert json.loads((tmp_path / "bench_targets.json").read_text())["targets"][0]["unit"] == "ms"
+    out = capsys.readouterr().out
+    assert "target 0.5" in out and ("met" in out or "NOT MET" in out)
