@@ -270,6 +270,12 @@ def first_mode(t, x):
     return float((len(crossings) - 1) / (crossings[-1] - crossings[0]))
 
 
+def till_arguments(duration, jit):
+    """The ``tca-casadi`` arguments of :func:`till_cantilever`'s run (its output folder apart)."""
+    return ["simulate", str(SCENARIOS / "analytic" / "steel_cantilever.yaml"), "--dt", "0.002", "--set",
+            f"duration={duration}", "--set", f"solver.jit={str(jit).lower()}", "--no-plot", "--no-animation", "--quiet"]
+
+
 def till_cantilever(duration, jit=False):
     """The whole ``tca-casadi simulate`` call (a fresh process: import, build, static start, every
     BDF2 step of 2 ms, the CSV and JSON; no plot or animation) on John Till's steel cantilever
@@ -278,9 +284,7 @@ def till_cantilever(duration, jit=False):
     Euler-Bernoulli's 5.596 Hz; ``jit``: with ``solver.jit`` (its compile, kept on disk, done
     by a first run that is not timed)."""
     import tempfile
-    command = [sys.executable, "-m", "tca_casadi.cli", "simulate", str(SCENARIOS / "analytic" / "steel_cantilever.yaml"),
-               "--dt", "0.002", "--set", f"duration={duration}", "--set", f"solver.jit={str(jit).lower()}",
-               "--no-plot", "--no-animation", "--quiet"]
+    command = [sys.executable, "-m", "tca_casadi.cli", *till_arguments(duration, jit)]
     with tempfile.TemporaryDirectory() as folder:
         if jit:
             subprocess.run(command + ["-o", folder], check=True, capture_output=True)

@@ -79,14 +79,11 @@ PROFILES = {
     "sweep": ("from tca_casadi.simulation import Simulation\nfrom tca_casadi.studies.sweep.run import Sweep\n"
               f"sim = Simulation.from_file({str(SCENARIOS / 'bending_module.yaml')!r})\n"
               "Sweep(sim, ['bending.tca2.temperature', 'bending.tca3.temperature'], 25, 125, steps=101).run()"),
-    "till": ("from tca_casadi.cli import main\n"
-             f"main(['simulate', {str(SCENARIOS / 'analytic' / 'steel_cantilever.yaml')!r}, '--dt', '0.002', "
-             "'--set', 'duration={duration}', '--set', 'solver.jit=true', '--no-plot', '--no-animation', '--quiet', "
-             "'-o', {folder!r}])"),
+    "till": "from bench import till_arguments\nfrom tca_casadi.cli import main\n"
+            "main(till_arguments({duration}, True) + ['-o', {folder!r}])",
     "dynamics": ("from bench import dynamics_rate\ndynamics_rate({name!r}, 0.002, 500, jit=True)"),     # the steps show
-    "inverse": ("from tca_casadi.cli import main\n"
-                f"main(['inverse', {str(SCENARIOS / 'arm.yaml')!r}, '--target-position', *{{target!r}}, '--no-plot', "
-                "'--quiet', '-o', {folder!r}])"),
+    "inverse": "from targets import inverse_arguments\nfrom tca_casadi.cli import main\n"
+               "main(inverse_arguments({target!r}, {folder!r}))",
     "study": ("from tca_casadi.simulation import Simulation\nfrom tca_casadi.studies.batch.study import Study\n"
               f"sim = Simulation.from_file({str(SCENARIOS / 'bending_module.yaml')!r}, [{{jit!r}}])\n"
               "Study(sim, vary={{f'bending.tca{{k}}.temperature': [25, 125, {per_axis}] for k in (1, 2, 3)}}).run()"),
@@ -150,6 +147,13 @@ def random_robot():
             "accuracy_met": bool(accuracy.get("met")), "exit": process.returncode}
 
 
+def inverse_arguments(target, folder):
+    """The ``tca-casadi inverse`` arguments of :func:`arm_inverse`'s run to ``target`` (three
+    coordinates [m], as text) into ``folder``."""
+    return ["inverse", str(SCENARIOS / "arm.yaml"), "--target-position", *target, "--no-plot", "--quiet", "-o",
+            str(folder)]
+
+
 def arm_inverse():
     """``tca-casadi inverse`` on the arm (whole call, the median of 3): to the tip of the arm
     with its bending module's TCA 2 at 60 degC (a forward solve gives it, not timed)."""
@@ -158,8 +162,7 @@ def arm_inverse():
     walls, reached = [], []
     for _ in range(3):
         with tempfile.TemporaryDirectory() as folder:
-            wall, _, process = _run(_cli("inverse", SCENARIOS / "arm.yaml", "--target-position",
-                                         *(f"{x:.9f}" for x in target), "--no-plot", "--quiet", "-o", folder))
+            wall, _, process = _run(_cli(*inverse_arguments([f"{x:.9f}" for x in target], folder)))
         walls.append(wall)
         reached.append("REACHED" in process.stdout)
     return {"wall_s": statistics.median(walls), "walls_s": walls, "exit": process.returncode, "reached": all(reached),

@@ -130,14 +130,23 @@ def geometry_function(shape, outline):
     numeric = {name: value for name, value in vars(shape).items() if name not in inputs and not isinstance(value, str)}
     key = (type(shape).__name__, tuple((name, np.asarray(value, float).tobytes()) for name, value in numeric.items()),
            tuple((name, _shape2(getattr(shape, name))) for name in inputs), _outline_key(outline))
-    if key not in _GEOMETRY_FUNCTIONS:
-        if len(_GEOMETRY_FUNCTIONS) > 256:
-            _GEOMETRY_FUNCTIONS.clear()
+
+    def build():
         x = ca.SX.sym("x", 7)
         fields = {name: ca.SX.sym(name, *_shape2(getattr(shape, name))) for name in inputs}
         g, n, point = separation(replace(shape, **fields), outline, x[0:3], rotation_matrix(x[3:7]))
-        _GEOMETRY_FUNCTIONS[key] = ca.Function("contact_geometry", [x, *fields.values()], [g, n, point])
-    return _GEOMETRY_FUNCTIONS[key], inputs
+        return ca.Function("contact_geometry", [x, *fields.values()], [g, n, point])
+    return _kept(_GEOMETRY_FUNCTIONS, key, build), inputs
+
+
+def _kept(cache, key, build, limit=256):
+    """``cache[key]``, built by ``build()`` the first time (the cache emptied past ``limit``
+    entries: a long study of moving obstacles must not grow it without end)."""
+    if key not in cache:
+        if len(cache) > limit:
+            cache.clear()
+        cache[key] = build()
+    return cache[key]
 
 
 def _shape2(value):
@@ -177,14 +186,12 @@ def gap_function(shape, outline):
     """CasADi Function ``(p (3,), h (4,)) -> g``: the gap [m] of :func:`gap` at a centerline
     point and quaternion, built once per shape and outline (kept by their description)."""
     import casadi as ca
-    key = _key(shape, outline)
-    if key not in _GAP_FUNCTIONS:
-        if len(_GAP_FUNCTIONS) > 256:
-            _GAP_FUNCTIONS.clear()
+
+    def build():
         p, h = ca.SX.sym("p", 3), ca.SX.sym("h", 4)
         g, _ = gap(shape, outline, p, rotation_matrix(h))
-        _GAP_FUNCTIONS[key] = ca.Function("gap", [p, h], [g])
-    return _GAP_FUNCTIONS[key]
+        return ca.Function("gap", [p, h], [g])
+    return _kept(_GAP_FUNCTIONS, _key(shape, outline), build)
 
 
 def _key(shape, outline):
@@ -205,12 +212,9 @@ _MAPPED = {}
 def gaps(shape, outline, p, h):
     """Gaps [m] (n,) at centerline points ``p`` (3, n) with quaternions ``h`` (4, n)."""
     p, h = np.asarray(p, float).reshape(3, -1), np.asarray(h, float).reshape(4, -1)
-    key = (_key(shape, outline), p.shape[1])
-    if key not in _MAPPED:
-        if len(_MAPPED) > 1024:
-            _MAPPED.clear()
-        _MAPPED[key] = gap_function(shape, outline).map(p.shape[1])
-    return np.array(_MAPPED[key](p, h)).ravel()
+    mapped = _kept(_MAPPED, (_key(shape, outline), p.shape[1]), lambda: gap_function(shape, outline).map(p.shape[1]),
+                   limit=1024)
+    return np.array(mapped(p, h)).ravel()
 
 
 def normal_contact(force, g, force_scale, gap_scale):

@@ -86,6 +86,8 @@ class SquareSystem:
             self._jacobian_pattern = CscPattern.of(jacobian.indptr, jacobian.indices, jacobian.shape)
         self.shape = self._jacobian_pattern.shape
         self._sensitivity = None
+        #: ``(P_from, P_to, tangent)`` of the last :meth:`predicted` (its error carried to the next)
+        self._last_tangent = None
         self._order = None
         self.last_lu = None
         #: the roundoff floor of the residual at the last Jacobian (:func:`roundoff_floor`)
@@ -343,7 +345,7 @@ class SquareSystem:
     def _tangent_error(self, w, P_from, step):
         """``w - tangent`` of the last :meth:`predicted` where it predicted ``w``'s point
         (``P_from``) by the same step, else None."""
-        last = getattr(self, "_last_tangent", None)
+        last = self._last_tangent
         if last is None or last[2].shape != w.shape or not np.array_equal(last[1], P_from):
             return None
         before = (last[1] - last[0]).reshape(-1, 1)

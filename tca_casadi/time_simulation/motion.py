@@ -180,11 +180,12 @@ class EnergyAccount:
 
 def _friction_work(before, after):
     """The energy [J] friction took from the rods over a step: ``-sum f_t . slip`` over the
-    contacts against obstacles (not the grips on free bodies, which a Solution's ``contacts``
-    also lists: :func:`_body_friction_work` takes those) closed at both ends (``contacts`` of the two StepOutputs; only a
-    contact closed at the step's start is anchored and carries friction), the slip the rod's
-    held material point's motion over the step (:func:`_slip`). With Coulomb's law ``f_t``
-    opposes the slip, so it is never negative; a sticking contact does not move."""
+    contacts against obstacles closed at both ends (``contacts`` of the two StepOutputs; only a
+    contact closed at the step's start is anchored and carries friction; not the grips on free
+    bodies, which a Solution's ``contacts`` also lists: :func:`_body_friction_work` takes
+    those), the slip the rod's held material point's motion over the step (:func:`_slip`).
+    With Coulomb's law ``f_t`` opposes the slip, so it is never negative; a sticking contact
+    does not move."""
     if getattr(after, "contacts", None) is None or getattr(before, "contacts", None) is None:
         return 0.0
     was = {(c.module, c.s, c.obstacle) for c in before.contacts}
